@@ -1,1 +1,23 @@
-fn main(){}
+//! `akl`: teach a robot arm a task from one demonstration and verify the learned spec.
+//!
+//! The binary only parses arguments, calls the library crates and prints; every algorithm
+//! lives in a crate.
+
+mod cli;
+mod commands;
+mod exit;
+mod table;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args = cli::Cli::parse();
+    match commands::run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.code)
+        }
+    }
+}

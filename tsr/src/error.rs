@@ -68,11 +68,7 @@ pub struct FileError<E: std::error::Error + 'static> {
 impl SpecError {
     /// Converts a serde_json error, recognising the non-finite literals JSON does not allow.
     pub fn from_json(err: &serde_json::Error, text: &str) -> Self {
-        let (line, column) = (err.line(), err.column());
-        let message = match non_finite_literal_at(text, line, column) {
-            Some(lit) => format!("non-finite number `{lit}` (JSON numbers must be finite)"),
-            None => strip_position(&err.to_string()),
-        };
+        let (line, column, message) = describe_json_error(err, text);
         SpecError::Json {
             line,
             column,
@@ -81,8 +77,19 @@ impl SpecError {
     }
 }
 
+/// Line, column and a plain message for a serde_json error on `text`; a NaN or infinity
+/// literal (which JSON does not allow) is named as such instead of "expected value".
+pub fn describe_json_error(err: &serde_json::Error, text: &str) -> (usize, usize, String) {
+    let (line, column) = (err.line(), err.column());
+    let message = match non_finite_literal_at(text, line, column) {
+        Some(lit) => format!("non-finite number `{lit}` (JSON numbers must be finite)"),
+        None => strip_position(&err.to_string()),
+    };
+    (line, column, message)
+}
+
 /// serde_json appends " at line L column C" to its messages; the position is reported separately.
-pub(crate) fn strip_position(message: &str) -> String {
+fn strip_position(message: &str) -> String {
     match message.rfind(" at line ") {
         Some(i) => message[..i].to_string(),
         None => message.to_string(),

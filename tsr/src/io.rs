@@ -11,9 +11,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "output path has no file name"))?;
+    let name = path.file_name().ok_or_else(|| {
+        io::Error::new(io::ErrorKind::InvalidInput, "output path has no file name")
+    })?;
     let tmp = dir.join(format!(
         ".{}.tmp-{}",
         name.to_string_lossy(),
@@ -113,7 +113,13 @@ fn spaced(compact: &str, value: &serde_json::Value) -> String {
         Value::Object(map) => {
             let parts: Vec<String> = map
                 .iter()
-                .map(|(k, v)| format!("{}: {}", Value::String(k.clone()), spaced(&v.to_string(), v)))
+                .map(|(k, v)| {
+                    format!(
+                        "{}: {}",
+                        Value::String(k.clone()),
+                        spaced(&v.to_string(), v)
+                    )
+                })
                 .collect();
             format!("{{{}}}", parts.join(", "))
         }
@@ -134,7 +140,10 @@ mod readable_tests {
         let v = serde_json::json!({"name": "a, b: c", "pose": {"p": [0.1, 0.2, 0.3], "q": [0.0, 0.0, 0.0, 1.0]},
             "list": (0..40).collect::<Vec<_>>()});
         let text = to_readable_json(&v).unwrap();
-        assert!(text.contains("\"pose\": {\"p\": [0.1, 0.2, 0.3], \"q\": [0.0, 0.0, 0.0, 1.0]}"), "{text}");
+        assert!(
+            text.contains("\"pose\": {\"p\": [0.1, 0.2, 0.3], \"q\": [0.0, 0.0, 0.0, 1.0]}"),
+            "{text}"
+        );
         assert!(text.contains("\"name\": \"a, b: c\""), "{text}");
         let back: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(back, v);

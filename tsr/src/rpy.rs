@@ -18,7 +18,8 @@ pub fn rpy_from_rotation(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let cos_pitch = m[(0, 0)].hypot(m[(1, 0)]);
     let pitch = (-m[(2, 0)]).atan2(cos_pitch);
     let yaw = m[(1, 0)].atan2(m[(0, 0)]);
-    let rest = Rotation3::from_euler_angles(0.0, pitch, yaw).inverse() * Rotation3::from_matrix_unchecked(m);
+    let rest = Rotation3::from_euler_angles(0.0, pitch, yaw).inverse()
+        * Rotation3::from_matrix_unchecked(m);
     let r = rest.matrix();
     let roll = r[(2, 1)].atan2(r[(1, 1)]);
     [roll, pitch, yaw]

@@ -34,7 +34,11 @@ struct VersionProbe {
 
 impl TaskSpec {
     /// A spec of the current version.
-    pub fn new(task: impl Into<String>, method: impl Into<String>, keyframes: Vec<Keyframe>) -> Self {
+    pub fn new(
+        task: impl Into<String>,
+        method: impl Into<String>,
+        keyframes: Vec<Keyframe>,
+    ) -> Self {
         TaskSpec {
             akl_spec: SPEC_VERSION,
             task: task.into(),
@@ -101,7 +105,10 @@ impl TaskSpec {
             return Err(invalid("task".into(), "is empty".into()));
         }
         if self.keyframes.is_empty() {
-            return Err(invalid("keyframes".into(), "a spec needs at least one keyframe".into()));
+            return Err(invalid(
+                "keyframes".into(),
+                "a spec needs at least one keyframe".into(),
+            ));
         }
         for (i, kf) in self.keyframes.iter().enumerate() {
             let at = |field: &str| format!("keyframes[{i}].{field}");
@@ -116,7 +123,10 @@ impl TaskSpec {
             }
             if let Some(t) = kf.t {
                 if !t.is_finite() || t < 0.0 {
-                    return Err(invalid(at("t"), format!("must be a finite time >= 0, got {t}")));
+                    return Err(invalid(
+                        at("t"),
+                        format!("must be a finite time >= 0, got {t}"),
+                    ));
                 }
             }
             if i == 0 && kf.constraint == Constraint::MoveInLine {
@@ -132,7 +142,10 @@ impl TaskSpec {
 
     /// The distinct reference objects the keyframes are grounded on.
     pub fn references(&self) -> BTreeSet<&str> {
-        self.keyframes.iter().map(|k| k.reference.as_str()).collect()
+        self.keyframes
+            .iter()
+            .map(|k| k.reference.as_str())
+            .collect()
     }
 
     /// Checks that every reference is the world frame or one of `objects`.
@@ -169,7 +182,12 @@ impl TaskSpec {
 
 fn pose_is_finite(pose: &Pose) -> bool {
     pose.translation.vector.iter().all(|v| v.is_finite())
-        && pose.rotation.quaternion().coords.iter().all(|v| v.is_finite())
+        && pose
+            .rotation
+            .quaternion()
+            .coords
+            .iter()
+            .all(|v| v.is_finite())
 }
 
 #[cfg(test)]
@@ -200,14 +218,20 @@ mod tests {
         TaskSpec::new(
             "demo",
             "akl",
-            vec![keyframe("part", Constraint::None), keyframe("shelf", Constraint::MoveInLine)],
+            vec![
+                keyframe("part", Constraint::None),
+                keyframe("shelf", Constraint::MoveInLine),
+            ],
         )
     }
 
     #[test]
     fn round_trips_through_json() {
         let s = spec();
-        assert_eq!(TaskSpec::from_json(&s.to_json()).unwrap().keyframes.len(), 2);
+        assert_eq!(
+            TaskSpec::from_json(&s.to_json()).unwrap().keyframes.len(),
+            2
+        );
     }
 
     fn err(text: &str) -> String {
@@ -231,22 +255,34 @@ mod tests {
     #[test]
     fn rejects_nan_with_its_position() {
         let e = err(&edited("\"t\": 1.5", "\"t\": NaN"));
-        assert!(e.contains("non-finite number `NaN`") && e.contains("line"), "{e}");
+        assert!(
+            e.contains("non-finite number `NaN`") && e.contains("line"),
+            "{e}"
+        );
     }
 
     #[test]
     fn rejects_inverted_bounds() {
         let e = err(&edited("[-0.01, 0.01]", "[0.02, 0.01]"));
-        assert!(e.contains("keyframes[0].tsr.bw") && e.contains("min 0.02 > max 0.01"), "{e}");
+        assert!(
+            e.contains("keyframes[0].tsr.bw") && e.contains("min 0.02 > max 0.01"),
+            "{e}"
+        );
     }
 
     #[test]
     fn rejects_unknown_enum_values_naming_the_line() {
         let e = err(&edited("\"kind\": \"interaction\"", "\"kind\": \"grasp\""));
-        assert!(e.contains("unknown variant `grasp`") && e.starts_with("line"), "{e}");
+        assert!(
+            e.contains("unknown variant `grasp`") && e.starts_with("line"),
+            "{e}"
+        );
         let e = err(&edited("\"gripper\": \"closed\"", "\"gripper\": \"shut\""));
         assert!(e.contains("unknown variant `shut`"), "{e}");
-        let e = err(&edited("\"constraint\": \"none\"", "\"constraint\": \"circle\""));
+        let e = err(&edited(
+            "\"constraint\": \"none\"",
+            "\"constraint\": \"circle\"",
+        ));
         assert!(e.contains("unknown variant `circle`"), "{e}");
     }
 

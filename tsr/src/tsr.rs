@@ -259,7 +259,10 @@ mod tests {
                     b[i] = [p[i].0, p[i].0 + p[i].1];
                     b[3 + i] = [r[i].0, r[i].0 + r[i].1];
                 }
-                b[4] = [b[4][0].clamp(-PI / 2.0, PI / 2.0), b[4][1].clamp(-PI / 2.0, PI / 2.0)];
+                b[4] = [
+                    b[4][0].clamp(-PI / 2.0, PI / 2.0),
+                    b[4][1].clamp(-PI / 2.0, PI / 2.0),
+                ];
                 Bounds(b)
             })
     }
@@ -341,7 +344,14 @@ mod tests {
         let tsr = Tsr::new(
             Pose::identity(),
             Pose::identity(),
-            Bounds([[0.0; 2], [0.0; 2], [0.0; 2], [-0.1, 0.1], [0.1, 0.3], [-0.1, 0.1]]),
+            Bounds([
+                [0.0; 2],
+                [0.0; 2],
+                [0.0; 2],
+                [-0.1, 0.1],
+                [0.1, 0.3],
+                [-0.1, 0.1],
+            ]),
         );
         let pose = pose_from_xyz_rpy([0.0; 3], [PI, PI - 0.2, PI]);
         assert!(tsr.contains(&pose), "{:?}", tsr.displacement(&pose));
@@ -350,7 +360,14 @@ mod tests {
     #[test]
     fn gimbal_lock_uses_the_free_roll_yaw_direction() {
         // At pitch = π/2 only roll − yaw matters: (0.5, π/2, 0.5) equals (0, π/2, 0).
-        let bw = Bounds([[0.0; 2], [0.0; 2], [0.0; 2], [0.4, 0.6], [-2.0, 2.0], [0.4, 0.6]]);
+        let bw = Bounds([
+            [0.0; 2],
+            [0.0; 2],
+            [0.0; 2],
+            [0.4, 0.6],
+            [-2.0, 2.0],
+            [0.4, 0.6],
+        ]);
         let tsr = Tsr::new(Pose::identity(), Pose::identity(), bw);
         let pose = pose_from_xyz_rpy([0.0; 3], [0.0, PI / 2.0, 0.0]);
         assert!(tsr.contains(&pose), "{:?}", tsr.displacement(&pose));

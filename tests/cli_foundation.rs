@@ -1,0 +1,160 @@
+//! End-to-end tests of `akl task` and `akl spec` through the binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn akl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the akl binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A scratch directory unique to one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn truth_text() -> String {
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tasks/inspection.truth.json"
+    ))
+    .unwrap()
+}
+
+#[test]
+fn task_list_shows_the_three_study_tasks() {
+    let o = akl(&["task", "list"]);
+    assert!(o.status.success());
+    let out = stdout(&o);
+    for name in ["pick_place", "inspection", "assembly"] {
+        assert!(out.contains(name), "{out}");
+    }
+    let o = akl(&["task", "list", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn task_show_prints_objects_goals_and_steps() {
+    let o = akl(&["task", "show", "inspection"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("scanner_2")
+            && out.contains("on(part, shelf_2)")
+            && out.contains("straight line"),
+        "{out}"
+    );
+    let o = akl(&["task", "show", "assembly", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["akl_task"], 1);
+}
+
+#[test]
+fn task_show_reads_a_task_file_by_path() {
+    let o = akl(&["task", "show", "tasks/pick_place.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn an_unknown_task_is_bad_input() {
+    let o = akl(&["task", "show", "juggling"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("unknown task `juggling`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn spec_check_passes_the_inspection_truth_with_four_keyframes() {
+    let o = akl(&["spec", "check", "tasks/inspection.truth.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("keyframes:   4"), "{out}");
+    assert!(out.contains("move_in_line on keyframes 1→2"), "{out}");
+    let o = akl(&["spec", "check", "tasks/inspection.truth.json", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["keyframes"], 4);
+    assert_eq!(v["constraint"], 2);
+}
+
+#[test]
+fn spec_show_prints_a_row_per_keyframe() {
+    let o = akl(&["spec", "show", "tasks/assembly.truth.json"]);
+    assert!(o.status.success());
+    let out = stdout(&o);
+    assert_eq!(
+        out.lines().filter(|l| l.contains("combined")).count(),
+        2,
+        "{out}"
+    );
+}
+
+/// Each broken spec fails with exit code 2 and one line naming the file and the problem.
+#[test]
+fn broken_specs_give_one_clear_line_and_exit_code_2() {
+    let dir = scratch("broken");
+    let good = truth_text();
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "malformed",
+            good.replacen("\"keyframes\": [", "\"keyframes\": [[", 1),
+            "line",
+        ),
+        (
+            "version",
+            good.replacen("\"akl_spec\": 1", "\"akl_spec\": 2", 1),
+            "unsupported spec version 2",
+        ),
+        (
+            "nan",
+            good.replacen("[-0.005, 0.005]", "[NaN, 0.005]", 1),
+            "non-finite number `NaN`",
+        ),
+        (
+            "inverted",
+            good.replacen("[-0.005, 0.005]", "[0.005, -0.005]", 1),
+            "min 0.005 > max -0.005",
+        ),
+        (
+            "reference",
+            good.replacen("\"reference\": \"part\"", "\"reference\": \"widget\"", 1),
+            "unknown reference object `widget`",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        assert_ne!(text, good, "{name}: the edit did not apply");
+        let path = dir.join(format!("{name}.json"));
+        std::fs::write(&path, text).unwrap();
+        let o = akl(&["spec", "check", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert_eq!(err.lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(path.to_str().unwrap()), "{name}: {err}");
+        assert!(err.contains(expected), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_missing_spec_file_is_bad_input() {
+    let o = akl(&["spec", "check", "no/such/spec.json"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no/such/spec.json"));
+}
