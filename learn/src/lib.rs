@@ -4,5 +4,10 @@
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
 pub mod demo;
+pub mod demo_error;
+pub mod jsonl;
+pub mod validate;
 
 pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION};
+pub use demo_error::DemoError;
+pub use jsonl::{read_jsonl, write_jsonl};
