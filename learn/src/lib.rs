@@ -4,5 +4,6 @@
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
 pub mod demo;
+pub mod tvd;
 
 pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION};
