@@ -4,6 +4,7 @@
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
 pub mod demo;
+pub mod okl;
 pub mod tvd;
 
 pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION};
