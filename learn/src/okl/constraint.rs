@@ -46,8 +46,14 @@ pub fn constraint_boundaries(
 }
 
 /// Lines 7–12 for one constrained region of one segment: the frames where the true
-/// constrained motion starts and ends, or `None` when the region holds no line to fit (shorter
-/// than the filter distance, or no motion) or the line found is a single frame.
+/// constrained motion starts and ends, or `None` when the region holds no line to fit or the
+/// line found is a single frame.
+///
+/// A region holds no line when its true-line part spans less than half the filter distance.
+/// That is what is left of a detection that started in the previous segment: the detector
+/// keeps its state for `D_F` past a line that ends at a gripper command, so the clipped tail
+/// in the next segment is about `D_F` long and its true-line part is a point (a real detection
+/// needs `2·D_F` of line before it switches on).
 pub fn learn_constraint(
     positions: &[Vector3<f64>],
     segment: &Segment,
@@ -55,6 +61,9 @@ pub fn learn_constraint(
     params: &ConstraintParams,
 ) -> Option<(usize, usize)> {
     let l = true_line(positions, region, params.filter_distance)?;
+    if (positions[*l.end()] - positions[*l.start()]).norm() < 0.5 * params.filter_distance {
+        return None;
+    }
     let line = fit_line(&positions[l.clone()])?;
     let errors = fitting_errors(positions, segment.frames(), &line);
     let smoothed = tvd::denoise(&errors, params.tvd_lambda);
