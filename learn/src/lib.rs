@@ -4,6 +4,7 @@
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
 pub mod demo;
+pub mod measures;
 pub mod okl;
 pub mod tvd;
 
