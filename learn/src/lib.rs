@@ -6,6 +6,9 @@
 pub mod demo;
 pub mod demo_error;
 pub mod jsonl;
+pub mod measures;
+pub mod okl;
+pub mod tvd;
 pub mod validate;
 
 pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION};

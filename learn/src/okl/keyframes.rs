@@ -1,0 +1,225 @@
+//! Algorithm 1, lines 12, 15 and 16: constraint keyframes, interaction keyframes at the gripper
+//! commands, and combining the two where they coincide.
+
+use super::segment::{gripper_changes, Segment};
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::{Constraint, Gripper, KeyframeKind};
+
+/// A keyframe before grounding: where in the demo it is and what it commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawKeyframe {
+    /// Demonstration frame.
+    pub frame: usize,
+    /// Interaction, constraint or combined.
+    pub kind: KeyframeKind,
+    /// Gripper state commanded once reached.
+    pub gripper: Gripper,
+    /// Constraint on the segment ending here.
+    pub constraint: Constraint,
+}
+
+/// A learned straight-line constraint: frames `start..=end` of one interaction segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LineConstraint {
+    /// The segment it lies in.
+    pub segment: Segment,
+    /// First frame of the line.
+    pub start: usize,
+    /// Last frame of the line.
+    pub end: usize,
+}
+
+/// Line 15, `AddInteractionKFs`: one keyframe per gripper command, at the frame the state
+/// changes, commanding the new state.
+pub fn interaction_keyframes(gripper: &[Gripper]) -> Vec<RawKeyframe> {
+    gripper_changes(gripper)
+        .into_iter()
+        .map(|k| RawKeyframe {
+            frame: k,
+            kind: KeyframeKind::Interaction,
+            gripper: gripper[k],
+            constraint: Constraint::None,
+        })
+        .collect()
+}
+
+/// Line 12, `ConstraintKF`: the two keyframes bounding a line; the gripper keeps the segment's
+/// state and the second keyframe carries the move-in-line constraint.
+pub fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
+    let kf = |frame, constraint| RawKeyframe {
+        frame,
+        kind: KeyframeKind::Constraint,
+        gripper: line.segment.gripper,
+        constraint,
+    };
+    [
+        kf(line.start, Constraint::None),
+        kf(line.end, Constraint::MoveInLine),
+    ]
+}
+
+/// Line 16, `CombineKF`: merges interaction and constraint keyframes into one ordered list.
+///
+/// A line boundary coincides with an interaction when it lies in the segment that interaction
+/// opens (line start) or closes (line end) and the end-effector positions at the two frames
+/// are at most `tolerance` metres apart; the boundary then moves to the interaction's frame and
+/// the two become one combined keyframe (the interaction's gripper command, the line's
+/// constraint flag). Lines in one segment that overlap are cut so the later one starts where
+/// the earlier one ends (one keyframe between them).
+pub fn combine(
+    interactions: &[RawKeyframe],
+    lines: &[LineConstraint],
+    positions: &[Vector3<f64>],
+    tolerance: f64,
+) -> Vec<RawKeyframe> {
+    let is_interaction = |k: usize| interactions.iter().any(|i| i.frame == k);
+    let near = |a: usize, b: usize| (positions[a] - positions[b]).norm() <= tolerance;
+    let mut snapped: Vec<LineConstraint> = Vec::with_capacity(lines.len());
+    for line in lines {
+        let mut l = *line;
+        if is_interaction(l.segment.start) && near(l.start, l.segment.start) {
+            l.start = l.segment.start;
+        }
+        if is_interaction(l.segment.end) && near(l.end, l.segment.end) {
+            l.end = l.segment.end;
+        }
+        if let Some(prev) = snapped.last() {
+            if l.start < prev.end {
+                l.start = prev.end;
+            }
+        }
+        if l.end > l.start {
+            snapped.push(l);
+        }
+    }
+    let mut out: Vec<RawKeyframe> = interactions.to_vec();
+    for l in &snapped {
+        for c in constraint_keyframes(l) {
+            match out.iter_mut().find(|k| k.frame == c.frame) {
+                Some(existing) => {
+                    if existing.kind == KeyframeKind::Interaction {
+                        existing.kind = KeyframeKind::Combined;
+                    }
+                    if c.constraint == Constraint::MoveInLine {
+                        existing.constraint = Constraint::MoveInLine;
+                    }
+                }
+                None => out.push(c),
+            }
+        }
+    }
+    out.sort_by_key(|k| k.frame);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Gripper::{Closed as C, Open as O};
+
+    fn positions(n: usize) -> Vec<Vector3<f64>> {
+        (0..n)
+            .map(|i| Vector3::new(i as f64 * 0.001, 0.0, 0.0))
+            .collect()
+    }
+
+    #[test]
+    fn interactions_at_each_command() {
+        let g = [O, O, C, C, O];
+        let k = interaction_keyframes(&g);
+        assert_eq!(k.len(), 2);
+        assert_eq!((k[0].frame, k[0].gripper), (2, C));
+        assert_eq!((k[1].frame, k[1].gripper), (4, O));
+    }
+
+    #[test]
+    fn a_line_inside_a_segment_gives_two_constraint_keyframes() {
+        let g = [O, O, C, C, C, C, C, C, C, C, O];
+        let inter = interaction_keyframes(&g);
+        let seg = Segment {
+            start: 2,
+            end: 10,
+            gripper: C,
+        };
+        let line = LineConstraint {
+            segment: seg,
+            start: 5,
+            end: 7,
+        };
+        let out = combine(&inter, &[line], &positions(11), 0.001);
+        let kinds: Vec<_> = out
+            .iter()
+            .map(|k| (k.frame, k.kind, k.constraint))
+            .collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (2, KeyframeKind::Interaction, Constraint::None),
+                (5, KeyframeKind::Constraint, Constraint::None),
+                (7, KeyframeKind::Constraint, Constraint::MoveInLine),
+                (10, KeyframeKind::Interaction, Constraint::None),
+            ]
+        );
+        assert!(out[1..3].iter().all(|k| k.gripper == C));
+    }
+
+    #[test]
+    fn boundaries_near_interactions_combine() {
+        let g = [O, O, C, C, C, C, C, C, C, C, O];
+        let inter = interaction_keyframes(&g);
+        let seg = Segment {
+            start: 2,
+            end: 10,
+            gripper: C,
+        };
+        let line = LineConstraint {
+            segment: seg,
+            start: 3,
+            end: 9,
+        };
+        // 1 mm per frame: within 1.5 mm both ends snap to the interactions.
+        let out = combine(&inter, &[line], &positions(11), 0.0015);
+        let kinds: Vec<_> = out
+            .iter()
+            .map(|k| (k.frame, k.kind, k.gripper, k.constraint))
+            .collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (2, KeyframeKind::Combined, C, Constraint::None),
+                (10, KeyframeKind::Combined, O, Constraint::MoveInLine),
+            ]
+        );
+        // With a tighter tolerance they stay apart.
+        assert_eq!(combine(&inter, &[line], &positions(11), 0.0005).len(), 4);
+    }
+
+    #[test]
+    fn consecutive_lines_share_a_keyframe() {
+        let seg = Segment {
+            start: 0,
+            end: 20,
+            gripper: O,
+        };
+        let a = LineConstraint {
+            segment: seg,
+            start: 2,
+            end: 8,
+        };
+        let b = LineConstraint {
+            segment: seg,
+            start: 6,
+            end: 15,
+        };
+        let out = combine(&[], &[a, b], &positions(21), 0.0);
+        let frames: Vec<_> = out.iter().map(|k| (k.frame, k.constraint)).collect();
+        assert_eq!(
+            frames,
+            vec![
+                (2, Constraint::None),
+                (8, Constraint::MoveInLine),
+                (15, Constraint::MoveInLine)
+            ]
+        );
+    }
+}

@@ -1,0 +1,210 @@
+//! Reference objects (thesis §3.2.4): every keyframe is grounded on the key object of the next
+//! interaction — the grasped object for a grasp, the object it is put on for a release.
+//!
+//! How the key object is found from the object poses:
+//! - **grasp** (gripper open → closed at frame g): the object that is carried — among the
+//!   objects that move at least [`CARRIED_MOTION`] between g and the next release (or the end),
+//!   the one whose pose relative to the end effector changes least, and by at most
+//!   [`CARRIED_SLIP`]. If nothing is carried that way (objects not tracked, or the hand did not
+//!   move), the object whose centre is nearest the tool centre point at g, movable objects
+//!   first when the task's world says which are movable.
+//! - **release** (closed → open at frame r): the support of the held object (the key object of
+//!   the grasp before, else the object nearest the tool centre point). With the task's world
+//!   (shapes known): among the other objects whose top is within [`SUPPORT_GAP`] of the held
+//!   object's bottom at r and whose outline seen from above contains its centre, the highest.
+//!   Without shapes, or when none qualifies: the object with the nearest centre in the
+//!   horizontal plane among those whose centre lies below the held object's centre.
+
+use crate::demo::Demo;
+use akl_scene::{Shape, World};
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
+
+/// Minimum displacement (metres) of an object over a closed-gripper segment to count as carried.
+pub const CARRIED_MOTION: f64 = 0.01;
+/// Largest change (metres) of a carried object's position relative to the end effector.
+pub const CARRIED_SLIP: f64 = 0.01;
+/// Largest gap (metres) between a held object's bottom and a support's top at a release.
+/// Wider than a resting contact: the object is released slightly above its support.
+pub const SUPPORT_GAP: f64 = 0.02;
+
+/// One object learning can ground on: its poses over the demo and, when known, its shape.
+#[derive(Debug, Clone)]
+pub struct SceneObject {
+    /// Object name.
+    pub name: String,
+    /// Pose at every frame, or one pose when the object never moves (not tracked in the demo).
+    pub poses: Vec<Pose>,
+    /// Shape, from the task's world.
+    pub shape: Option<Shape>,
+    /// Whether the object can be picked up, from the task's world.
+    pub movable: Option<bool>,
+}
+
+impl SceneObject {
+    /// Pose at frame `k` (the single pose of an untracked object).
+    pub fn pose(&self, k: usize) -> &Pose {
+        &self.poses[k.min(self.poses.len() - 1)]
+    }
+
+    fn centre(&self, k: usize) -> Vector3<f64> {
+        self.pose(k).translation.vector
+    }
+}
+
+/// The objects of a demo: its tracks, plus the objects of `world` the demo does not track
+/// (furniture a driver may not record), fixed at their pose in the world.
+pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
+    let mut out: Vec<SceneObject> = demo
+        .objects
+        .iter()
+        .filter(|t| !t.poses.is_empty())
+        .map(|t| {
+            let known = world.and_then(|w| w.object(&t.name));
+            SceneObject {
+                name: t.name.clone(),
+                poses: t.poses.clone(),
+                shape: known.map(|o| o.shape.clone()),
+                movable: known.map(|o| o.movable),
+            }
+        })
+        .collect();
+    if let Some(w) = world {
+        for o in &w.objects {
+            if !out.iter().any(|s| s.name == o.name) {
+                out.push(SceneObject {
+                    name: o.name.clone(),
+                    poses: vec![o.pose],
+                    shape: Some(o.shape.clone()),
+                    movable: Some(o.movable),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The object grasped at frame `grasp` and held until `hold_end` (index into `objects`).
+pub fn grasped_object(
+    objects: &[SceneObject],
+    ee: &[Pose],
+    grasp: usize,
+    hold_end: usize,
+) -> Option<usize> {
+    let relative = |o: &SceneObject, k: usize| (ee[k].inverse() * o.pose(k)).translation.vector;
+    let carried = objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| (o.centre(hold_end) - o.centre(grasp)).norm() >= CARRIED_MOTION)
+        .map(|(i, o)| (i, (relative(o, hold_end) - relative(o, grasp)).norm()))
+        .filter(|(_, slip)| *slip <= CARRIED_SLIP)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i);
+    carried.or_else(|| nearest_to_tool(objects, ee, grasp))
+}
+
+/// The object nearest the tool centre point at frame `k`; movable objects are preferred when
+/// the world says which are.
+pub fn nearest_to_tool(objects: &[SceneObject], ee: &[Pose], k: usize) -> Option<usize> {
+    let tool = ee[k].translation.vector;
+    let nearest = |movable_only: bool| {
+        objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !movable_only || o.movable == Some(true))
+            .map(|(i, o)| (i, (o.centre(k) - tool).norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    };
+    nearest(true).or_else(|| nearest(false))
+}
+
+/// The object `held` is put on at frame `release` (index into `objects`).
+pub fn support_object(objects: &[SceneObject], held: usize, release: usize) -> Option<usize> {
+    let h = &objects[held];
+    let centre = h.centre(release);
+    let by_shape = h.shape.as_ref().and_then(|shape| {
+        let bottom = shape.bottom(h.pose(release));
+        objects
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != held)
+            .filter_map(|(i, o)| o.shape.as_ref().map(|s| (i, o, s)))
+            .filter(|(_, o, s)| (s.top(o.pose(release)) - bottom).abs() <= SUPPORT_GAP)
+            .filter(|(_, o, s)| {
+                let local = o.pose(release).inverse_transform_point(&centre.into());
+                s.outline_contains(local.x, local.y, 0.0)
+            })
+            .max_by(|a, b| {
+                a.2.top(a.1.pose(release))
+                    .total_cmp(&b.2.top(b.1.pose(release)))
+            })
+            .map(|(i, _, _)| i)
+    });
+    by_shape.or_else(|| {
+        objects
+            .iter()
+            .enumerate()
+            .filter(|(i, o)| *i != held && o.centre(release).z < centre.z)
+            .map(|(i, o)| (i, (o.centre(release) - centre).xy().norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_tsr::pose::pose_from_xyz;
+
+    fn fixed(name: &str, p: [f64; 3], shape: Option<Shape>) -> SceneObject {
+        SceneObject {
+            name: name.into(),
+            poses: vec![pose_from_xyz(p)],
+            shape,
+            movable: Some(false),
+        }
+    }
+
+    #[test]
+    fn the_carried_object_is_the_grasped_one() {
+        // The hand moves from x = 0 to x = 0.3 carrying `a`; `b` stays.
+        let ee: Vec<Pose> = (0..=10)
+            .map(|i| pose_from_xyz([i as f64 * 0.03, 0.0, 0.2]))
+            .collect();
+        let a = SceneObject {
+            name: "a".into(),
+            poses: ee
+                .iter()
+                .map(|p| p * pose_from_xyz([0.0, 0.0, -0.02]))
+                .collect(),
+            shape: None,
+            movable: None,
+        };
+        let b = fixed("b", [0.0, 0.01, 0.18], None);
+        assert_eq!(grasped_object(&[b.clone(), a.clone()], &ee, 0, 10), Some(1));
+        // Without motion, the nearest object wins.
+        assert_eq!(grasped_object(&[b, a], &ee, 0, 0), Some(1));
+    }
+
+    #[test]
+    fn support_by_shape_then_by_position() {
+        let box_shape = |x: f64, y: f64, z: f64| Some(Shape::Box { size: [x, y, z] });
+        let held = SceneObject {
+            name: "block".into(),
+            poses: vec![pose_from_xyz([0.5, -0.3, 0.18])],
+            shape: box_shape(0.05, 0.05, 0.08),
+            movable: Some(true),
+        };
+        let table = fixed("table", [0.35, 0.0, -0.02], box_shape(1.2, 1.4, 0.04));
+        let shelf = fixed("shelf", [0.48, -0.3, 0.07], box_shape(0.22, 0.26, 0.14));
+        let objs = vec![table.clone(), held.clone(), shelf.clone()];
+        assert_eq!(support_object(&objs, 1, 0), Some(2));
+        let strip = |mut o: SceneObject| {
+            o.shape = None;
+            o
+        };
+        let objs: Vec<_> = objs.into_iter().map(strip).collect();
+        assert_eq!(support_object(&objs, 1, 0), Some(2));
+    }
+}
