@@ -3,14 +3,18 @@
 //! Learning knows no robot: it reads end-effector and object poses, gripper states and the
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
+pub mod calibration;
 pub mod demo;
 pub mod demo_error;
+pub mod detector;
 pub mod jsonl;
 pub mod measures;
 pub mod okl;
 pub mod tvd;
 pub mod validate;
 
+pub use calibration::Calibration;
 pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION};
 pub use demo_error::DemoError;
+pub use detector::Detector;
 pub use jsonl::{read_jsonl, write_jsonl};

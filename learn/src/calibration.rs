@@ -1,0 +1,362 @@
+//! Per-user detector calibration (thesis §3.3.1.1): the logistic regression β0, β1 and the
+//! energy tank's dissipation T_d and threshold T_s, fitted from one straight-line and one circle
+//! demonstration.
+
+use std::path::Path;
+
+use k::nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::detector::line_error;
+
+/// The calibration file version.
+pub const CALIBRATION_VERSION: u32 = 1;
+
+/// The thesis's distance filter D_F (m).
+pub const FILTER_DISTANCE: f64 = 0.05;
+
+/// Consecutive confidently straight filtered points needed to switch: 2 points = 10 cm of line at
+/// D_F = 5 cm, on top of the 2 points eq. 3.2 needs before its first error. Fewer let short
+/// accidental straight stretches of free motion trigger queries; more delay detection beyond the
+/// shortest lines of the built-in tasks (26 cm).
+pub const SWITCH_POINTS: f64 = 2.0;
+
+/// Where T_d sits between the mean squared switching probability on unconstrained motion (0) and
+/// on constrained motion (1): low, so that free motion drains the tank and lines fill it fast.
+pub const DISSIPATION_FRACTION: f64 = 0.1;
+
+/// The parameters of the online detector for one teacher.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Calibration {
+    /// File format version; always [`CALIBRATION_VERSION`].
+    pub akl_calibration: u32,
+    /// Logistic intercept β0.
+    pub beta0: f64,
+    /// Logistic slope β1 (1/m): σ(β0 + β1·d) is the probability that motion with line error d is
+    /// unconstrained.
+    pub beta1: f64,
+    /// Tank dissipation per filtered point, T_d.
+    pub tank_dissipation: f64,
+    /// Tank switching threshold, T_s.
+    pub tank_threshold: f64,
+    /// Distance filter D_F (m).
+    pub filter_distance: f64,
+}
+
+impl Default for Calibration {
+    /// The calibration shipped for teachers who have not calibrated: fitted by
+    /// [`Calibration::fit`] to the simulated default teacher's line and circle demonstrations
+    /// (`akl calibrate --simulate`, seed 0) and rounded.
+    fn default() -> Self {
+        Calibration {
+            akl_calibration: CALIBRATION_VERSION,
+            beta0: -6.0,
+            beta1: 900.0,
+            tank_dissipation: 0.1,
+            tank_threshold: 1.6,
+            filter_distance: FILTER_DISTANCE,
+        }
+    }
+}
+
+/// Why calibration failed.
+#[derive(Debug, Error, PartialEq)]
+pub enum CalibrationError {
+    /// A demonstration is too short to give distance errors.
+    #[error("the {which} demonstration is too short: {points} distance errors after the {filter} m filter (need at least {needed})")]
+    TooShort {
+        /// `line` or `circle`.
+        which: &'static str,
+        /// Errors it gave.
+        points: usize,
+        /// Needed.
+        needed: usize,
+        /// D_F.
+        filter: f64,
+    },
+    /// The line and circle cannot be told apart.
+    #[error("the line and the circle cannot be told apart (mean line error {line:.4} m, mean circle error {circle:.4} m): demonstrate a straighter line and a rounder circle")]
+    Indistinguishable {
+        /// Mean error on the line.
+        line: f64,
+        /// Mean error on the circle.
+        circle: f64,
+    },
+    /// A calibration file is malformed.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Fewest distance errors per demonstration for a meaningful fit.
+const MIN_POINTS: usize = 4;
+
+impl Calibration {
+    /// Pr(unconstrained | d) = σ(β0 + β1·d), the logistic model of eq. 3.3.
+    pub fn probability_unconstrained(&self, d: f64) -> f64 {
+        1.0 / (1.0 + (-(self.beta0 + self.beta1 * d)).exp())
+    }
+
+    /// Fits a calibration to a straight-line demonstration (labelled constrained) and a circle
+    /// demonstration (labelled unconstrained), given as end-effector positions.
+    ///
+    /// β0, β1 maximize the likelihood (Newton's method with a tiny ridge, so perfectly separable
+    /// data still gives finite parameters). T_d and T_s then follow from the fitted model on the
+    /// same data: with m_c and m_u the mean squared switching probabilities on the line and on
+    /// the circle, T_d = m_u + [`DISSIPATION_FRACTION`]·(m_c − m_u) and
+    /// T_s = [`SWITCH_POINTS`]·(m_c − T_d), raised if needed so that the tank never fills on the
+    /// circle itself.
+    pub fn fit(
+        line: &[Vector3<f64>],
+        circle: &[Vector3<f64>],
+    ) -> Result<Calibration, CalibrationError> {
+        let line_errors = filtered_errors(line, FILTER_DISTANCE);
+        let circle_errors = filtered_errors(circle, FILTER_DISTANCE);
+        for (which, errors) in [("line", &line_errors), ("circle", &circle_errors)] {
+            if errors.len() < MIN_POINTS {
+                return Err(CalibrationError::TooShort {
+                    which,
+                    points: errors.len(),
+                    needed: MIN_POINTS,
+                    filter: FILTER_DISTANCE,
+                });
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let (line_mean, circle_mean) = (mean(&line_errors), mean(&circle_errors));
+        if circle_mean < 2.0 * line_mean || circle_mean - line_mean < 1e-3 {
+            return Err(CalibrationError::Indistinguishable {
+                line: line_mean,
+                circle: circle_mean,
+            });
+        }
+        let (beta0, beta1) = logistic_fit(&line_errors, &circle_errors);
+        let mut calibration = Calibration {
+            akl_calibration: CALIBRATION_VERSION,
+            beta0,
+            beta1,
+            tank_dissipation: 0.0,
+            tank_threshold: 0.0,
+            filter_distance: FILTER_DISTANCE,
+        };
+        let squared_switch = |errors: &[f64]| {
+            mean(
+                &errors
+                    .iter()
+                    .map(|d| (1.0 - calibration.probability_unconstrained(*d)).powi(2))
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let (m_c, m_u) = (squared_switch(&line_errors), squared_switch(&circle_errors));
+        calibration.tank_dissipation = m_u + DISSIPATION_FRACTION * (m_c - m_u);
+        calibration.tank_threshold = SWITCH_POINTS * (m_c - calibration.tank_dissipation);
+        let mut tank: f64 = 0.0;
+        let mut peak: f64 = 0.0;
+        for d in &circle_errors {
+            let p = 1.0 - calibration.probability_unconstrained(*d);
+            tank = (tank + p * p - calibration.tank_dissipation).max(0.0);
+            peak = peak.max(tank);
+        }
+        calibration.tank_threshold = calibration.tank_threshold.max(1.2 * peak);
+        Ok(calibration)
+    }
+
+    /// Reads a calibration file.
+    pub fn load(path: &Path) -> Result<Calibration, CalibrationError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| CalibrationError::Invalid(format!("{}: {e}", path.display())))?;
+        let calibration: Calibration = serde_json::from_str(&text).map_err(|e| {
+            let (line, column, message) = akl_tsr::error::describe_json_error(&e, &text);
+            CalibrationError::Invalid(format!(
+                "{}: line {line}, column {column}: {message}",
+                path.display()
+            ))
+        })?;
+        calibration
+            .validate()
+            .map_err(|m| CalibrationError::Invalid(format!("{}: {m}", path.display())))?;
+        Ok(calibration)
+    }
+
+    /// Checks the version and that every parameter is usable.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.akl_calibration != CALIBRATION_VERSION {
+            return Err(format!(
+                "unsupported akl_calibration version {}",
+                self.akl_calibration
+            ));
+        }
+        if !(self.beta1 > 0.0) || !self.beta0.is_finite() || !self.beta1.is_finite() {
+            return Err("beta1 must be positive and beta0 finite".into());
+        }
+        if !(self.tank_dissipation >= 0.0
+            && self.tank_threshold > 0.0
+            && self.filter_distance > 0.0)
+            || !self.tank_threshold.is_finite()
+        {
+            return Err(
+                "tank_dissipation ≥ 0, tank_threshold > 0 and filter_distance > 0 are required"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The eq. 3.2 distance errors of a whole trajectory after the distance filter.
+pub fn filtered_errors(positions: &[Vector3<f64>], filter: f64) -> Vec<f64> {
+    let mut kept: Vec<Vector3<f64>> = Vec::new();
+    for p in positions {
+        if kept.last().is_none_or(|last| (p - last).norm() >= filter) {
+            kept.push(*p);
+        }
+    }
+    kept.windows(3)
+        .map(|w| line_error(&w[0], &w[1], &w[2]))
+        .collect()
+}
+
+/// Errors are fitted in centimetres so that β0 and β1 have similar magnitudes.
+const SCALE: f64 = 100.0;
+/// The ridge penalty ½·RIDGE·(β0² + β1_cm²) that keeps separable data finite.
+const RIDGE: f64 = 1e-3;
+
+/// Maximum-likelihood logistic regression of "unconstrained" on d: constrained samples are
+/// label 0, unconstrained label 1. Errors are scaled to centimetres inside for conditioning.
+fn logistic_fit(constrained: &[f64], unconstrained: &[f64]) -> (f64, f64) {
+    let samples: Vec<(f64, f64)> = constrained
+        .iter()
+        .map(|d| (d * SCALE, 0.0))
+        .chain(unconstrained.iter().map(|d| (d * SCALE, 1.0)))
+        .collect();
+    let (mut b0, mut b1) = (0.0f64, 0.0f64);
+    for _ in 0..100 {
+        let (mut g0, mut g1, mut h00, mut h01, mut h11) = (0.0, -RIDGE * b1, RIDGE, 0.0, RIDGE);
+        g0 -= RIDGE * b0;
+        for (x, y) in &samples {
+            let p = 1.0 / (1.0 + (-(b0 + b1 * x)).exp());
+            let w = p * (1.0 - p);
+            g0 += y - p;
+            g1 += (y - p) * x;
+            h00 += w;
+            h01 += w * x;
+            h11 += w * x * x;
+        }
+        let det = h00 * h11 - h01 * h01;
+        if det.abs() < 1e-300 {
+            break;
+        }
+        let s0 = (h11 * g0 - h01 * g1) / det;
+        let s1 = (h00 * g1 - h01 * g0) / det;
+        b0 += s0;
+        b1 += s1;
+        if s0.abs() + s1.abs() < 1e-10 {
+            break;
+        }
+    }
+    (b0, b1 * SCALE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn noisy_line(n: usize, noise: f64) -> Vec<Vector3<f64>> {
+        (0..n)
+            .map(|i| {
+                let s = i as f64 * 0.002;
+                let wobble = noise * ((i as f64) * 0.7).sin();
+                Vector3::new(s, wobble, 0.3 + wobble * 0.5)
+            })
+            .collect()
+    }
+
+    fn circle(n: usize, radius: f64) -> Vec<Vector3<f64>> {
+        (0..n)
+            .map(|i| {
+                let a = i as f64 * 0.002 / radius;
+                Vector3::new(radius * a.cos(), radius * a.sin(), 0.3)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_fit_separates_line_from_circle_and_the_tank_respects_both() {
+        let line = noisy_line(400, 0.002);
+        let circle = circle(1200, 0.12);
+        let calibration = Calibration::fit(&line, &circle).unwrap();
+        assert!(calibration.beta1 > 0.0);
+        let line_errors = filtered_errors(&line, FILTER_DISTANCE);
+        let circle_errors = filtered_errors(&circle, FILTER_DISTANCE);
+        assert!(line_errors
+            .iter()
+            .all(|d| calibration.probability_unconstrained(*d) < 0.5));
+        assert!(circle_errors
+            .iter()
+            .all(|d| calibration.probability_unconstrained(*d) > 0.5));
+        let (_, on_line) = crate::detector::replay(calibration, &line);
+        assert_eq!(on_line.len(), 1, "the line switches the detector on once");
+        let (_, on_circle) = crate::detector::replay(calibration, &circle);
+        assert!(on_circle.is_empty(), "the circle never switches it");
+    }
+
+    #[test]
+    fn the_fit_maximizes_the_penalized_likelihood() {
+        let line = filtered_errors(&noisy_line(400, 0.004), FILTER_DISTANCE);
+        let circle = filtered_errors(&circle(1200, 0.3), FILTER_DISTANCE);
+        let (b0, b1) = logistic_fit(&line, &circle);
+        let log_likelihood = |b0: f64, b1: f64| {
+            let ll = |d: &f64, y: f64| {
+                let p = 1.0 / (1.0 + (-(b0 + b1 * d)).exp());
+                if y > 0.5 {
+                    p.ln()
+                } else {
+                    (1.0 - p).ln()
+                }
+            };
+            line.iter().map(|d| ll(d, 0.0)).sum::<f64>()
+                + circle.iter().map(|d| ll(d, 1.0)).sum::<f64>()
+        };
+        let objective = |b0: f64, b1: f64| {
+            log_likelihood(b0, b1) - 0.5 * RIDGE * (b0 * b0 + (b1 / SCALE).powi(2))
+        };
+        let best = objective(b0, b1);
+        for (d0, d1) in [
+            (0.05, 0.0),
+            (-0.05, 0.0),
+            (0.0, 5.0),
+            (0.0, -5.0),
+            (0.05, 5.0),
+            (-0.05, -5.0),
+        ] {
+            assert!(objective(b0 + d0, b1 + d1) <= best + 1e-9);
+        }
+    }
+
+    #[test]
+    fn degenerate_calibration_data_is_a_clear_error() {
+        let line = noisy_line(400, 0.002);
+        assert!(matches!(
+            Calibration::fit(&line[..20], &circle(1200, 0.12)),
+            Err(CalibrationError::TooShort { which: "line", .. })
+        ));
+        let still = vec![Vector3::new(0.1, 0.2, 0.3); 500];
+        assert!(matches!(
+            Calibration::fit(&line, &still),
+            Err(CalibrationError::TooShort {
+                which: "circle",
+                ..
+            })
+        ));
+        assert!(matches!(
+            Calibration::fit(&line, &noisy_line(400, 0.002)),
+            Err(CalibrationError::Indistinguishable { .. })
+        ));
+    }
+
+    #[test]
+    fn the_default_is_valid() {
+        assert_eq!(Calibration::default().validate(), Ok(()));
+    }
+}
