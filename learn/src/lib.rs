@@ -10,6 +10,7 @@ pub mod detector;
 pub mod jsonl;
 pub mod measures;
 pub mod okl;
+pub mod teacher;
 pub mod tvd;
 pub mod validate;
 

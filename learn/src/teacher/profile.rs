@@ -1,0 +1,146 @@
+//! How a simulated teacher behaves: noise, speed, mistakes and habits.
+
+use serde::{Deserialize, Serialize};
+
+/// When a teacher marks keyframes in a keyframe demonstration (KD).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct KeyframeHabit {
+    /// Chance of forgetting to mark the end of a step.
+    pub miss_chance: f64,
+    /// Extra marks per step in the middle of the motion (a teacher who marks too often).
+    pub extra_per_step: f64,
+}
+
+/// A seeded simulated teacher's parameters. Numbers are metres, seconds and probabilities.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TeacherProfile {
+    /// Mean hand speed along the path (m/s). Kinesthetic teaching of a 7-kg arm is slow:
+    /// 0.12 m/s makes a 30 cm reach last about 2.5 s.
+    pub speed: f64,
+    /// Relative spread of the speed from one motion to the next (uniform, ±).
+    pub speed_variation: f64,
+    /// Peak amplitude of physiological tremor (m, three sinusoids at 8–12 Hz).
+    pub tremor: f64,
+    /// Standard deviation of the position sensor's white noise (m).
+    pub sensor_noise: f64,
+    /// How far a free motion bows away from the straight line, as a fraction of its length.
+    pub curvature: f64,
+    /// Chance that a free motion is made in an unintended straight line.
+    pub unintended_line_chance: f64,
+    /// Chance that an answer to "Do I have to move in a straight line there?" is wrong.
+    pub wrong_answer_rate: f64,
+    /// Chance that an answer is "I don't know" instead.
+    pub unknown_answer_rate: f64,
+    /// Keyframe-marking habits (KD baseline).
+    pub keyframes: KeyframeHabit,
+    /// Recording rate (Hz), 100 by default, at most 1000.
+    pub rate: f64,
+    /// Pause at each grasp and release while the gripper moves (s).
+    pub dwell: f64,
+}
+
+/// Highest supported recording rate (Hz).
+pub const MAX_RATE: f64 = 1000.0;
+
+impl TeacherProfile {
+    /// The careful teacher: no unintended lines, correct answers, marks every step. Noise of a
+    /// steady hand (1 mm tremor, 0.5 mm sensor noise).
+    pub fn careful() -> Self {
+        TeacherProfile {
+            speed: 0.12,
+            speed_variation: 0.25,
+            tremor: 0.001,
+            sensor_noise: 0.0005,
+            curvature: 0.3,
+            unintended_line_chance: 0.0,
+            wrong_answer_rate: 0.0,
+            unknown_answer_rate: 0.0,
+            keyframes: KeyframeHabit {
+                miss_chance: 0.0,
+                extra_per_step: 0.0,
+            },
+            rate: 100.0,
+            dwell: 0.6,
+        }
+    }
+
+    /// A first-time teacher as in the thesis's study (§4.4): moves straight in free space one
+    /// time in four, answers wrongly one time in five and says "I don't know" one time in ten
+    /// (the study traced 14 of its 19 constraint errors to answers, so answers must be the
+    /// dominant error source), shakes more, and marks keyframes unevenly.
+    pub fn novice() -> Self {
+        TeacherProfile {
+            speed: 0.1,
+            speed_variation: 0.4,
+            tremor: 0.002,
+            sensor_noise: 0.0005,
+            curvature: 0.25,
+            unintended_line_chance: 0.25,
+            wrong_answer_rate: 0.2,
+            unknown_answer_rate: 0.1,
+            keyframes: KeyframeHabit {
+                miss_chance: 0.15,
+                extra_per_step: 0.5,
+            },
+            rate: 100.0,
+            dwell: 0.8,
+        }
+    }
+
+    /// A teacher who always moves straight in free space (to exercise the dialogue), otherwise
+    /// careful.
+    pub fn straight() -> Self {
+        TeacherProfile {
+            unintended_line_chance: 1.0,
+            ..TeacherProfile::careful()
+        }
+    }
+
+    /// The named presets: `default` (= careful), `careful`, `novice`, `straight`.
+    pub fn named(name: &str) -> Option<Self> {
+        match name {
+            "default" | "careful" => Some(TeacherProfile::careful()),
+            "novice" => Some(TeacherProfile::novice()),
+            "straight" => Some(TeacherProfile::straight()),
+            _ => None,
+        }
+    }
+
+    /// The preset names, for help and error messages.
+    pub const NAMES: [&'static str; 4] = ["default", "careful", "novice", "straight"];
+
+    /// Checks that every parameter is in range.
+    pub fn validate(&self) -> Result<(), String> {
+        let probabilities = [
+            ("unintended_line_chance", self.unintended_line_chance),
+            ("wrong_answer_rate", self.wrong_answer_rate),
+            ("unknown_answer_rate", self.unknown_answer_rate),
+            ("keyframes.miss_chance", self.keyframes.miss_chance),
+        ];
+        if let Some((name, v)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
+            return Err(format!("{name} = {v} is not a probability"));
+        }
+        if !(self.speed > 0.0) || !(0.0..1.0).contains(&self.speed_variation) {
+            return Err("speed must be positive and speed_variation in [0, 1)".into());
+        }
+        if !(self.rate > 0.0 && self.rate <= MAX_RATE) {
+            return Err(format!("rate {} Hz is outside (0, {MAX_RATE}]", self.rate));
+        }
+        if [
+            self.tremor,
+            self.sensor_noise,
+            self.curvature,
+            self.dwell,
+            self.keyframes.extra_per_step,
+        ]
+        .iter()
+        .any(|v| !(*v >= 0.0) || !v.is_finite())
+        {
+            return Err(
+                "tremor, sensor_noise, curvature, dwell and keyframes.extra_per_step must be ≥ 0"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}
