@@ -187,14 +187,14 @@ impl Calibration {
                 self.akl_calibration
             ));
         }
-        if !(self.beta1 > 0.0) || !self.beta0.is_finite() || !self.beta1.is_finite() {
+        if !self.beta1.is_finite() || self.beta1 <= 0.0 || !self.beta0.is_finite() {
             return Err("beta1 must be positive and beta0 finite".into());
         }
-        if !(self.tank_dissipation >= 0.0
+        let usable = self.tank_dissipation >= 0.0
             && self.tank_threshold > 0.0
-            && self.filter_distance > 0.0)
-            || !self.tank_threshold.is_finite()
-        {
+            && self.tank_threshold.is_finite()
+            && self.filter_distance > 0.0;
+        if !usable {
             return Err(
                 "tank_dissipation ≥ 0, tank_threshold > 0 and filter_distance > 0 are required"
                     .into(),

@@ -85,7 +85,7 @@ impl Detector {
             return None;
         }
         let d = line_error(&self.filtered[0], &self.filtered[1], &self.filtered[2]);
-        self.step(d).then(|| Switch {
+        self.step(d).then_some(Switch {
             constrained: self.constrained,
             error: d,
             line_start: self.line_start,

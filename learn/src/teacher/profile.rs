@@ -120,10 +120,10 @@ impl TeacherProfile {
         if let Some((name, v)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
             return Err(format!("{name} = {v} is not a probability"));
         }
-        if !(self.speed > 0.0) || !(0.0..1.0).contains(&self.speed_variation) {
+        if self.speed.is_nan() || self.speed <= 0.0 || !(0.0..1.0).contains(&self.speed_variation) {
             return Err("speed must be positive and speed_variation in [0, 1)".into());
         }
-        if !(self.rate > 0.0 && self.rate <= MAX_RATE) {
+        if self.rate.is_nan() || self.rate <= 0.0 || self.rate > MAX_RATE {
             return Err(format!("rate {} Hz is outside (0, {MAX_RATE}]", self.rate));
         }
         if [
@@ -134,7 +134,7 @@ impl TeacherProfile {
             self.keyframes.extra_per_step,
         ]
         .iter()
-        .any(|v| !(*v >= 0.0) || !v.is_finite())
+        .any(|v| !v.is_finite() || *v < 0.0)
         {
             return Err(
                 "tremor, sensor_noise, curvature, dwell and keyframes.extra_per_step must be ≥ 0"

@@ -1,0 +1,302 @@
+//! The learner's question, the teacher's answer sources, and the suggestion (thesis §3.3.1.2).
+
+use std::io::{BufRead, Write};
+
+use k::nalgebra::Vector3;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use thiserror::Error;
+
+use crate::demo::Answer;
+
+/// The query posed on every 0→1 switch of the detector.
+pub const QUERY: &str = "Do I have to move in a straight line there?";
+
+/// The suggestion shown after "no" or "I don't know".
+pub const SUGGESTION: &str = "Please do not move in a line unless the robot must move in a line.";
+
+/// A query grounded in the scene: where the detected line is and what is near it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Question {
+    /// Demonstration time of the query (s).
+    pub t: f64,
+    /// Frame of the query.
+    pub frame: usize,
+    /// Where the detected line starts (world, m).
+    pub line_start: Vector3<f64>,
+    /// Where the hand is now.
+    pub line_end: Vector3<f64>,
+    /// Objects nearest the line, with their distance to it (m), nearest first (at most 3).
+    pub nearest_objects: Vec<(String, f64)>,
+}
+
+impl Question {
+    /// Unit direction of the detected line (zero if it has no length).
+    pub fn direction(&self) -> Vector3<f64> {
+        (self.line_end - self.line_start)
+            .try_normalize(1e-12)
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Length of the detected line so far (m).
+    pub fn length(&self) -> f64 {
+        (self.line_end - self.line_start).norm()
+    }
+
+    /// The question in words, physically grounded, with what each answer will do.
+    pub fn describe(&self) -> String {
+        let d = self.direction();
+        let near = if self.nearest_objects.is_empty() {
+            "no objects nearby".to_string()
+        } else {
+            self.nearest_objects
+                .iter()
+                .map(|(n, dist)| format!("{n} ({:.0} cm)", dist * 100.0))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        format!(
+            "At t = {:.1} s you moved in a straight line: from ({:.2}, {:.2}, {:.2}) m, {:.0} cm so far, \
+             heading ({:+.2}, {:+.2}, {:+.2}); nearest: {near}.\n{QUERY}\n  \
+             [y] yes: the robot will keep this straight line in the task\n  \
+             [n] no: the robot will move freely here\n  \
+             [?] I don't know: the robot keeps the line to be safe",
+            self.t,
+            self.line_start.x,
+            self.line_start.y,
+            self.line_start.z,
+            self.length() * 100.0,
+            d.x,
+            d.y,
+            d.z
+        )
+    }
+}
+
+/// Why an answer could not be had.
+#[derive(Debug, Error, PartialEq)]
+pub enum DialogueError {
+    /// A list of answers was shorter than the number of queries.
+    #[error("query {query} at t = {t:.2} s has no answer: --answers lists only {given}")]
+    OutOfAnswers {
+        /// 1-based query number.
+        query: usize,
+        /// Its time.
+        t: f64,
+        /// How many answers were given.
+        given: usize,
+    },
+    /// The terminal could not be used.
+    #[error("cannot ask on the terminal: {0}")]
+    Terminal(String),
+    /// An answer list did not parse.
+    #[error("{0}")]
+    Parse(String),
+}
+
+/// Something that answers the learner's queries.
+pub trait AnswerSource {
+    /// The answer to `question`.
+    fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError>;
+}
+
+/// Parses one answer word: `yes`/`y`, `no`/`n`, `unknown`/`u`/`?`/`dont-know`.
+pub fn parse_answer(word: &str) -> Option<Answer> {
+    match word.trim().to_ascii_lowercase().as_str() {
+        "yes" | "y" => Some(Answer::Yes),
+        "no" | "n" => Some(Answer::No),
+        "unknown" | "u" | "?" | "dont-know" | "idk" => Some(Answer::Unknown),
+        _ => None,
+    }
+}
+
+/// Answers given in advance, in order (`--answers yes,no,unknown`).
+#[derive(Debug, Clone)]
+pub struct ListedAnswers {
+    answers: Vec<Answer>,
+    next: usize,
+}
+
+impl ListedAnswers {
+    /// Parses a comma-separated list; the error names the bad word.
+    pub fn parse(list: &str) -> Result<Self, DialogueError> {
+        let answers = list
+            .split(',')
+            .filter(|w| !w.trim().is_empty())
+            .map(|w| {
+                parse_answer(w).ok_or_else(|| {
+                    DialogueError::Parse(format!(
+                        "`{}` is not an answer (use yes, no or unknown)",
+                        w.trim()
+                    ))
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(ListedAnswers { answers, next: 0 })
+    }
+}
+
+impl AnswerSource for ListedAnswers {
+    fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
+        let answer = self
+            .answers
+            .get(self.next)
+            .copied()
+            .ok_or(DialogueError::OutOfAnswers {
+                query: self.next + 1,
+                t: question.t,
+                given: self.answers.len(),
+            })?;
+        self.next += 1;
+        Ok(answer)
+    }
+}
+
+/// Says yes to everything (keeps every detected line).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AllYes;
+
+impl AnswerSource for AllYes {
+    fn answer(&mut self, _: &Question) -> Result<Answer, DialogueError> {
+        Ok(Answer::Yes)
+    }
+}
+
+/// A simulated teacher who knows which lines the task requires and errs at given rates.
+#[derive(Debug, Clone)]
+pub struct Oracle {
+    required: Vec<bool>,
+    window: usize,
+    wrong_rate: f64,
+    unknown_rate: f64,
+    rng: ChaCha8Rng,
+}
+
+impl Oracle {
+    /// An oracle over per-frame flags "a required line is under way", answering yes when one
+    /// was under way within the last `window` frames; wrong with `wrong_rate`, "I don't know"
+    /// with `unknown_rate`.
+    pub fn new(
+        required: Vec<bool>,
+        window: usize,
+        wrong_rate: f64,
+        unknown_rate: f64,
+        rng: ChaCha8Rng,
+    ) -> Self {
+        Oracle {
+            required,
+            window,
+            wrong_rate,
+            unknown_rate,
+            rng,
+        }
+    }
+}
+
+impl AnswerSource for Oracle {
+    fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
+        let end = question.frame.min(self.required.len().saturating_sub(1));
+        let from = end.saturating_sub(self.window);
+        let required = self
+            .required
+            .get(from..=end)
+            .is_some_and(|s| s.iter().any(|x| *x));
+        if self.rng.gen_bool(self.unknown_rate) {
+            return Ok(Answer::Unknown);
+        }
+        let wrong = self.rng.gen_bool(self.wrong_rate);
+        Ok(if required != wrong {
+            Answer::Yes
+        } else {
+            Answer::No
+        })
+    }
+}
+
+/// Asks a person: prints the grounded question and reads one key (y, n or ?) and Enter.
+pub struct Terminal<R, W> {
+    input: R,
+    output: W,
+}
+
+impl<R: BufRead, W: Write> Terminal<R, W> {
+    /// Asks on `output` and reads answers from `input` (normally `/dev/tty`, so a demonstration
+    /// can stream in on stdin at the same time).
+    pub fn new(input: R, output: W) -> Self {
+        Terminal { input, output }
+    }
+}
+
+impl<R: BufRead, W: Write> AnswerSource for Terminal<R, W> {
+    fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
+        let io = |e: std::io::Error| DialogueError::Terminal(e.to_string());
+        writeln!(self.output, "\n{}", question.describe()).map_err(io)?;
+        loop {
+            write!(self.output, "answer [y/n/?]: ").map_err(io)?;
+            self.output.flush().map_err(io)?;
+            let mut line = String::new();
+            if self.input.read_line(&mut line).map_err(io)? == 0 {
+                return Err(DialogueError::Terminal(
+                    "the terminal closed before an answer".into(),
+                ));
+            }
+            if let Some(answer) = parse_answer(&line) {
+                return Ok(answer);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    fn question(frame: usize) -> Question {
+        Question {
+            t: 1.0,
+            frame,
+            line_start: Vector3::new(0.5, 0.2, 0.3),
+            line_end: Vector3::new(0.5, 0.0, 0.3),
+            nearest_objects: vec![("scanner_1".into(), 0.12)],
+        }
+    }
+
+    #[test]
+    fn listed_answers_run_out_with_a_clear_error() {
+        let mut list = ListedAnswers::parse("yes, n").unwrap();
+        assert_eq!(list.answer(&question(1)), Ok(Answer::Yes));
+        assert_eq!(list.answer(&question(2)), Ok(Answer::No));
+        let err = list.answer(&question(3)).unwrap_err().to_string();
+        assert!(err.contains("query 3") && err.contains("only 2"), "{err}");
+        assert!(ListedAnswers::parse("yes,maybe")
+            .unwrap_err()
+            .to_string()
+            .contains("`maybe`"));
+    }
+
+    #[test]
+    fn a_perfect_oracle_knows_required_lines() {
+        let mut required = vec![false; 100];
+        required[40..60].iter_mut().for_each(|x| *x = true);
+        let mut oracle = Oracle::new(required, 10, 0.0, 0.0, ChaCha8Rng::seed_from_u64(1));
+        assert_eq!(oracle.answer(&question(55)), Ok(Answer::Yes));
+        assert_eq!(oracle.answer(&question(65)), Ok(Answer::Yes));
+        assert_eq!(oracle.answer(&question(90)), Ok(Answer::No));
+        let mut liar = Oracle::new(vec![true; 10], 0, 1.0, 0.0, ChaCha8Rng::seed_from_u64(1));
+        assert_eq!(liar.answer(&question(5)), Ok(Answer::No));
+    }
+
+    #[test]
+    fn the_terminal_shows_a_grounded_question_and_takes_one_key() {
+        let mut out = Vec::new();
+        let mut terminal = Terminal::new(&b"maybe\n?\n"[..], &mut out);
+        assert_eq!(terminal.answer(&question(3)), Ok(Answer::Unknown));
+        let shown = String::from_utf8(out).unwrap();
+        assert!(
+            shown.contains(QUERY) && shown.contains("20 cm") && shown.contains("scanner_1 (12 cm)"),
+            "{shown}"
+        );
+        assert!(shown.contains("(+0.00, -1.00, +0.00)"), "{shown}");
+    }
+}
