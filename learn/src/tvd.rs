@@ -295,7 +295,7 @@ mod tests {
             // A noisy plateau ending in a short plateau at another level: the end of the
             // signal decides the last jump.
             let mut y = head.clone();
-            y.extend(std::iter::repeat(level).take(tail));
+            y.extend(std::iter::repeat_n(level, tail));
             let x = denoise(&y, lam);
             let v = optimality_violation(&y, &x, lam);
             prop_assert!(v.is_none(), "{:?}", v);

@@ -64,7 +64,7 @@ pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
             SceneObject {
                 name: t.name.clone(),
                 poses: t.poses.clone(),
-                shape: known.map(|o| o.shape.clone()),
+                shape: known.map(|o| o.shape),
                 movable: known.map(|o| o.movable),
             }
         })
@@ -75,7 +75,7 @@ pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
                 out.push(SceneObject {
                     name: o.name.clone(),
                     poses: vec![o.pose],
-                    shape: Some(o.shape.clone()),
+                    shape: Some(o.shape),
                     movable: Some(o.movable),
                 });
             }
