@@ -9,6 +9,7 @@ pub mod demo_error;
 pub mod detector;
 pub mod dialogue;
 pub mod jsonl;
+pub mod mcap_io;
 pub mod measures;
 pub mod okl;
 pub mod session;

@@ -1,0 +1,553 @@
+//! The MCAP demonstration format: what `akl teach` records, readable by Foxglove.
+//!
+//! One channel per stream with JSON messages: `/ee` and `/objects/<name>` as
+//! `foxglove.PoseInFrame`, `/dialogue` as `foxglove.Log`, and AKL channels `/gripper`,
+//! `/detector` and `/akl/header`; the header is also a metadata record. All messages of one
+//! frame share its log time. The writer closes a chunk at least once a second (of demonstration
+//! time and of wall-clock time), so a killed recording loses at most its last second; the reader
+//! recovers every complete chunk of a truncated file and reports what was lost.
+
+use std::collections::BTreeMap;
+use std::io::{Seek, Write};
+use std::time::{Duration, Instant};
+
+use akl_tsr::{Gripper, Pose};
+use k::nalgebra::{Quaternion, Translation3, UnitQuaternion};
+use serde_json::{json, Value};
+
+use crate::demo::{
+    Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION,
+};
+use crate::demo_error::DemoError;
+use crate::dialogue::{QUERY, SUGGESTION};
+use crate::session::RecordingSink;
+use crate::validate::FrameChecker;
+
+/// Longest stretch of recording kept in an unfinished chunk.
+pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
+
+const POSE_SCHEMA: &str = r#"{"title":"foxglove.PoseInFrame","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"pose":{"type":"object","properties":{"position":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}}}"#;
+const LOG_SCHEMA: &str = r#"{"title":"foxglove.Log","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"level":{"type":"integer"},"message":{"type":"string"},"name":{"type":"string"},"file":{"type":"string"},"line":{"type":"integer"}}}"#;
+const GRIPPER_SCHEMA: &str = r#"{"title":"akl.Gripper","type":"object","properties":{"state":{"type":"string","enum":["open","closed"]}}}"#;
+const DETECTOR_SCHEMA: &str =
+    r#"{"title":"akl.Detector","type":"object","properties":{"constrained":{"type":"boolean"}}}"#;
+const HEADER_SCHEMA: &str = r#"{"title":"akl.DemoHeader","type":"object","properties":{"akl_demo":{"type":"integer"},"task":{"type":"string"},"frame":{"type":"string"},"calibration":{"type":"string"}}}"#;
+
+/// Streams a demonstration into an MCAP file.
+pub struct McapDemoWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    ee: u16,
+    objects: Vec<u16>,
+    gripper: u16,
+    detector: u16,
+    dialogue: u16,
+    sequence: u32,
+    last_flush_time: f64,
+    last_flush_clock: Instant,
+}
+
+fn mcap_error(e: mcap::McapError) -> std::io::Error {
+    std::io::Error::other(e.to_string())
+}
+
+fn nanos(t: f64) -> u64 {
+    (t.max(0.0) * 1e9).round() as u64
+}
+
+fn stamp(t: f64) -> Value {
+    let ns = nanos(t);
+    json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
+}
+
+fn pose_message(t: f64, frame: &str, pose: &Pose) -> Value {
+    let p = pose.translation.vector;
+    let q = pose.rotation.coords;
+    json!({"timestamp": stamp(t), "frame_id": frame,
+           "pose": {"position": {"x": p.x, "y": p.y, "z": p.z},
+                    "orientation": {"x": q.x, "y": q.y, "z": q.z, "w": q.w}}})
+}
+
+impl<W: Write + Seek> McapDemoWriter<W> {
+    /// Starts a recording of `header` with the named objects.
+    pub fn new(out: W, header: &DemoHeader, objects: &[String]) -> std::io::Result<Self> {
+        let options = mcap::WriteOptions::new().profile("akl").chunk_size(None);
+        let mut writer = options.create(out).map_err(mcap_error)?;
+        let none = BTreeMap::new();
+        let pose = writer
+            .add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes())
+            .map_err(mcap_error)?;
+        let log = writer
+            .add_schema("foxglove.Log", "jsonschema", LOG_SCHEMA.as_bytes())
+            .map_err(mcap_error)?;
+        let grip = writer
+            .add_schema("akl.Gripper", "jsonschema", GRIPPER_SCHEMA.as_bytes())
+            .map_err(mcap_error)?;
+        let det = writer
+            .add_schema("akl.Detector", "jsonschema", DETECTOR_SCHEMA.as_bytes())
+            .map_err(mcap_error)?;
+        let head = writer
+            .add_schema("akl.DemoHeader", "jsonschema", HEADER_SCHEMA.as_bytes())
+            .map_err(mcap_error)?;
+        let header_channel = writer
+            .add_channel(head, "/akl/header", "json", &none)
+            .map_err(mcap_error)?;
+        let ee = writer
+            .add_channel(pose, "/ee", "json", &none)
+            .map_err(mcap_error)?;
+        let mut object_channels = Vec::with_capacity(objects.len());
+        for name in objects {
+            object_channels.push(
+                writer
+                    .add_channel(pose, &format!("/objects/{name}"), "json", &none)
+                    .map_err(mcap_error)?,
+            );
+        }
+        let gripper = writer
+            .add_channel(grip, "/gripper", "json", &none)
+            .map_err(mcap_error)?;
+        let detector = writer
+            .add_channel(det, "/detector", "json", &none)
+            .map_err(mcap_error)?;
+        let dialogue = writer
+            .add_channel(log, "/dialogue", "json", &none)
+            .map_err(mcap_error)?;
+        let mut metadata = BTreeMap::new();
+        metadata.insert("task".to_string(), header.task.clone());
+        metadata.insert("frame".to_string(), header.frame.clone());
+        metadata.insert("akl_demo".to_string(), header.akl_demo.to_string());
+        if let Some(c) = &header.calibration {
+            metadata.insert("calibration".to_string(), c.clone());
+        }
+        writer
+            .write_metadata(&mcap::records::Metadata {
+                name: "akl_demo".into(),
+                metadata,
+            })
+            .map_err(mcap_error)?;
+        let mut this = McapDemoWriter {
+            writer,
+            ee,
+            objects: object_channels,
+            gripper,
+            detector,
+            dialogue,
+            sequence: 0,
+            last_flush_time: 0.0,
+            last_flush_clock: Instant::now(),
+        };
+        let header_json = serde_json::to_vec(header).map_err(std::io::Error::other)?;
+        this.send(header_channel, 0.0, &header_json)?;
+        this.writer.flush().map_err(mcap_error)?;
+        Ok(this)
+    }
+
+    fn send(&mut self, channel: u16, t: f64, data: &[u8]) -> std::io::Result<()> {
+        self.sequence += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: nanos(t),
+            publish_time: nanos(t),
+        };
+        self.writer
+            .write_to_known_channel(&header, data)
+            .map_err(mcap_error)
+    }
+
+    fn send_json(&mut self, channel: u16, t: f64, value: &Value) -> std::io::Result<()> {
+        let bytes = serde_json::to_vec(value).map_err(std::io::Error::other)?;
+        self.send(channel, t, &bytes)
+    }
+
+    /// Closes the chunk if a second of demonstration or wall-clock time has passed.
+    fn maybe_flush(&mut self, t: f64) -> std::io::Result<()> {
+        if t - self.last_flush_time >= FLUSH_INTERVAL.as_secs_f64()
+            || self.last_flush_clock.elapsed() >= FLUSH_INTERVAL
+        {
+            self.writer.flush().map_err(mcap_error)?;
+            self.last_flush_time = t;
+            self.last_flush_clock = Instant::now();
+        }
+        Ok(())
+    }
+
+    /// Writes frame `i` of `demo`.
+    pub fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
+        let t = demo.times[i];
+        self.maybe_flush(t)?;
+        let frame = demo.header.frame.clone();
+        self.send_json(self.ee, t, &pose_message(t, &frame, &demo.ee[i]))?;
+        for k in 0..self.objects.len() {
+            let message = pose_message(t, &frame, &demo.objects[k].poses[i]);
+            self.send_json(self.objects[k], t, &message)?;
+        }
+        let state = match demo.gripper[i] {
+            Gripper::Open => "open",
+            Gripper::Closed => "closed",
+        };
+        self.send_json(self.gripper, t, &json!({"state": state}))?;
+        if let Some(c) = demo.detector.get(i) {
+            self.send_json(self.detector, t, &json!({"constrained": c}))?;
+        }
+        Ok(())
+    }
+
+    /// Writes a dialogue event as a `foxglove.Log` line (with `name` = `akl.<kind>`).
+    pub fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+        let (name, message) = match event.kind {
+            DialogueKind::Query => ("akl.query", QUERY.to_string()),
+            DialogueKind::Answer(a) => ("akl.answer", answer_word(a).to_string()),
+            DialogueKind::Suggestion => ("akl.suggestion", SUGGESTION.to_string()),
+            DialogueKind::Keyframe => ("akl.keyframe", "keyframe".to_string()),
+        };
+        let value = json!({"timestamp": stamp(event.t), "level": 2, "message": message, "name": name, "file": "", "line": 0});
+        self.send_json(self.dialogue, event.t, &value)
+    }
+
+    /// Writes a whole demonstration and finishes the file.
+    pub fn write_all(mut self, demo: &Demo) -> std::io::Result<W> {
+        let mut events = demo.events.iter().peekable();
+        for i in 0..demo.len() {
+            self.write_frame(demo, i)?;
+            while let Some(e) = events.next_if(|e| e.frame <= i) {
+                self.write_event(e)?;
+            }
+        }
+        for e in events {
+            self.write_event(e)?;
+        }
+        self.finish()
+    }
+
+    /// Writes the summary and returns the underlying writer.
+    pub fn finish(mut self) -> std::io::Result<W> {
+        self.writer.finish().map_err(mcap_error)?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+impl<W: Write + Seek> RecordingSink for McapDemoWriter<W> {
+    fn frame(&mut self, demo: &Demo, index: usize) -> std::io::Result<()> {
+        self.write_frame(demo, index)
+    }
+
+    fn event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+        self.write_event(event)
+    }
+}
+
+fn answer_word(a: Answer) -> &'static str {
+    match a {
+        Answer::Yes => "yes",
+        Answer::No => "no",
+        Answer::Unknown => "unknown",
+    }
+}
+
+/// What a truncated recording lost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Truncation {
+    /// Frames recovered.
+    pub frames: usize,
+    /// Time of the last recovered frame (s).
+    pub last_time: f64,
+    /// Why reading stopped.
+    pub reason: String,
+}
+
+impl std::fmt::Display for Truncation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the recording is truncated ({}); recovered {} frames up to t = {:.2} s, anything later is lost",
+            self.reason, self.frames, self.last_time
+        )
+    }
+}
+
+/// Reads an MCAP demonstration; a truncated file gives what its complete chunks hold plus a
+/// [`Truncation`] report.
+pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> {
+    let stream =
+        mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into())
+            .map_err(|e| DemoError::Format(format!("not an MCAP file: {e}")))?;
+    let mut header: Option<DemoHeader> = None;
+    let mut frames: BTreeMap<u64, PartialFrame> = BTreeMap::new();
+    let mut events: Vec<(f64, DialogueKind)> = Vec::new();
+    let mut object_names: Vec<String> = Vec::new();
+    let mut stopped: Option<String> = None;
+    for message in stream {
+        let message = match message {
+            Ok(m) => m,
+            Err(e) => {
+                stopped = Some(e.to_string());
+                break;
+            }
+        };
+        let topic = message.channel.topic.as_str();
+        let t_ns = message.log_time;
+        let t = t_ns as f64 / 1e9;
+        let bad =
+            |what: &str| DemoError::Format(format!("message on {topic} at t = {t:.3} s: {what}"));
+        let value: Value =
+            serde_json::from_slice(&message.data).map_err(|e| bad(&format!("not JSON: {e}")))?;
+        match topic {
+            "/akl/header" => {
+                header = Some(serde_json::from_value(value).map_err(|e| bad(&e.to_string()))?)
+            }
+            "/ee" => {
+                frames.entry(t_ns).or_default().ee = Some(parse_pose(&value).map_err(|e| bad(&e))?)
+            }
+            "/gripper" => {
+                let state = match value.get("state").and_then(Value::as_str) {
+                    Some("open") => Gripper::Open,
+                    Some("closed") => Gripper::Closed,
+                    _ => return Err(bad("`state` must be open or closed")),
+                };
+                frames.entry(t_ns).or_default().gripper = Some(state);
+            }
+            "/detector" => {
+                let c = value
+                    .get("constrained")
+                    .and_then(Value::as_bool)
+                    .ok_or_else(|| bad("`constrained` must be a boolean"))?;
+                frames.entry(t_ns).or_default().detector = Some(c);
+            }
+            "/dialogue" => {
+                let kind = match value.get("name").and_then(Value::as_str) {
+                    Some("akl.query") => DialogueKind::Query,
+                    Some("akl.suggestion") => DialogueKind::Suggestion,
+                    Some("akl.keyframe") => DialogueKind::Keyframe,
+                    Some("akl.answer") => DialogueKind::Answer(
+                        value
+                            .get("message")
+                            .and_then(Value::as_str)
+                            .and_then(crate::dialogue::parse_answer)
+                            .ok_or_else(|| bad("an answer must say yes, no or unknown"))?,
+                    ),
+                    _ => continue,
+                };
+                events.push((t, kind));
+            }
+            other => {
+                if let Some(name) = other.strip_prefix("/objects/") {
+                    let index = match object_names.iter().position(|n| n == name) {
+                        Some(i) => i,
+                        None => {
+                            object_names.push(name.to_string());
+                            object_names.len() - 1
+                        }
+                    };
+                    let pose = parse_pose(&value).map_err(|e| bad(&e))?;
+                    let frame = frames.entry(t_ns).or_default();
+                    if frame.objects.len() <= index {
+                        frame.objects.resize(index + 1, None);
+                    }
+                    frame.objects[index] = Some(pose);
+                }
+            }
+        }
+    }
+    let header = header.ok_or_else(|| {
+        DemoError::Format("no `/akl/header` message: not an AKL demonstration".into())
+    })?;
+    if header.akl_demo != DEMO_VERSION {
+        return Err(DemoError::Format(format!(
+            "unsupported akl_demo version {}",
+            header.akl_demo
+        )));
+    }
+    let mut demo = Demo {
+        header,
+        times: Vec::new(),
+        ee: Vec::new(),
+        gripper: Vec::new(),
+        objects: object_names
+            .iter()
+            .map(|n| ObjectTrack {
+                name: n.clone(),
+                poses: Vec::new(),
+            })
+            .collect(),
+        detector: Vec::new(),
+        events: Vec::new(),
+    };
+    let mut checker = FrameChecker::default();
+    let total = frames.len();
+    let mut incomplete_tail = false;
+    for (i, (t_ns, frame)) in frames.into_iter().enumerate() {
+        let complete = frame.ee.is_some()
+            && frame.gripper.is_some()
+            && frame.objects.len() == object_names.len()
+            && frame.objects.iter().all(Option::is_some);
+        if !complete {
+            if stopped.is_some() && i + 1 == total {
+                incomplete_tail = true;
+                break;
+            }
+            return Err(DemoError::Frame {
+                frame: i,
+                message: "some of its streams are missing (ee, gripper or an object)".into(),
+            });
+        }
+        let t = t_ns as f64 / 1e9;
+        let names: Vec<&str> = object_names.iter().map(String::as_str).collect();
+        checker
+            .check(t, &names)
+            .map_err(|message| DemoError::Frame { frame: i, message })?;
+        demo.times.push(t);
+        demo.ee.push(frame.ee.expect("checked complete"));
+        demo.gripper.push(frame.gripper.expect("checked complete"));
+        for (track, pose) in demo.objects.iter_mut().zip(frame.objects) {
+            track.poses.push(pose.expect("checked complete"));
+        }
+        if let Some(c) = frame.detector {
+            demo.detector.push(c);
+        }
+    }
+    if !demo.detector.is_empty() && demo.detector.len() != demo.len() {
+        return Err(DemoError::Format(
+            "the detector state is missing on some frames".into(),
+        ));
+    }
+    if demo.is_empty() {
+        return Err(match stopped {
+            Some(reason) => DemoError::Format(format!(
+                "the recording is truncated ({reason}) before its first complete frame"
+            )),
+            None => DemoError::Empty,
+        });
+    }
+    let last_time = *demo.times.last().expect("not empty");
+    demo.events = events
+        .into_iter()
+        .filter(|(t, _)| *t <= last_time)
+        .map(|(t, kind)| DialogueEvent {
+            t,
+            frame: crate::jsonl::frame_at(&demo.times, t),
+            kind,
+        })
+        .collect();
+    let truncation = stopped.map(|reason| Truncation {
+        frames: demo.len(),
+        last_time,
+        reason: if incomplete_tail {
+            format!("{reason}; a partial last frame was dropped")
+        } else {
+            reason
+        },
+    });
+    Ok((demo, truncation))
+}
+
+#[derive(Default)]
+struct PartialFrame {
+    ee: Option<Pose>,
+    gripper: Option<Gripper>,
+    detector: Option<bool>,
+    objects: Vec<Option<Pose>>,
+}
+
+fn parse_pose(value: &Value) -> Result<Pose, String> {
+    let get = |path: [&str; 3]| -> Result<f64, String> {
+        let v = value
+            .get(path[0])
+            .and_then(|v| v.get(path[1]))
+            .and_then(|v| v.get(path[2]))
+            .and_then(Value::as_f64)
+            .ok_or_else(|| format!("missing {}.{}.{}", path[0], path[1], path[2]))?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("{}.{}.{} is not finite", path[0], path[1], path[2]))
+        }
+    };
+    let p = [
+        get(["pose", "position", "x"])?,
+        get(["pose", "position", "y"])?,
+        get(["pose", "position", "z"])?,
+    ];
+    let q = [
+        get(["pose", "orientation", "x"])?,
+        get(["pose", "orientation", "y"])?,
+        get(["pose", "orientation", "z"])?,
+        get(["pose", "orientation", "w"])?,
+    ];
+    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > akl_tsr::pose::QUATERNION_NORM_TOLERANCE {
+        return Err(format!("quaternion is not unit length (norm {norm:.6})"));
+    }
+    let rotation = UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2]));
+    Ok(Pose::from_parts(
+        Translation3::new(p[0], p[1], p[2]),
+        rotation,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dialogue::AllYes;
+    use crate::teach::run_session;
+    use crate::teacher::{demonstrate, TeacherProfile};
+    use crate::Calibration;
+    use akl_scene::builtin;
+    use std::io::Cursor;
+
+    fn recorded() -> Demo {
+        let task = builtin::resolve("inspection").unwrap();
+        let sim = demonstrate(&task, &task.world, &TeacherProfile::careful(), 4).unwrap();
+        run_session(&sim, Calibration::default(), &mut AllYes, None).unwrap()
+    }
+
+    fn write(demo: &Demo) -> Vec<u8> {
+        let names: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
+        let writer = McapDemoWriter::new(Cursor::new(Vec::new()), &demo.header, &names).unwrap();
+        writer.write_all(demo).unwrap().into_inner()
+    }
+
+    fn close(a: &Pose, b: &Pose) -> bool {
+        (a.translation.vector - b.translation.vector).norm() < 1e-12
+            && a.rotation.angle_to(&b.rotation) < 1e-9
+    }
+
+    #[test]
+    fn a_recording_reads_back() {
+        let demo = recorded();
+        let (back, truncation) = read_mcap(&write(&demo)).unwrap();
+        assert!(truncation.is_none());
+        assert_eq!(back.header, demo.header);
+        assert_eq!(back.len(), demo.len());
+        assert_eq!(back.gripper, demo.gripper);
+        assert_eq!(back.detector, demo.detector);
+        assert!(back.ee.iter().zip(&demo.ee).all(|(a, b)| close(a, b)));
+        assert_eq!(
+            back.events.iter().map(|e| e.kind).collect::<Vec<_>>(),
+            demo.events.iter().map(|e| e.kind).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn a_truncated_recording_keeps_all_but_the_last_second() {
+        let demo = recorded();
+        let bytes = write(&demo);
+        let cut = &bytes[..bytes.len() * 2 / 3];
+        let (back, truncation) = read_mcap(cut).unwrap();
+        let truncation = truncation.expect("the cut is reported");
+        assert_eq!(truncation.frames, back.len());
+        let full_duration = *demo.times.last().unwrap();
+        assert!(back.len() < demo.len());
+        // Everything up to the last complete chunk survives: what is lost is at most a chunk
+        // (one second) plus the part of the file that was cut off.
+        let kept_fraction = back.len() as f64 / demo.len() as f64;
+        assert!(kept_fraction > 0.5, "kept {kept_fraction}");
+        assert!(back.times.last().unwrap() + 1.0 + full_duration / 3.0 + 1.0 >= full_duration);
+        assert!(back.ee.iter().zip(&demo.ee).all(|(a, b)| close(a, b)));
+        assert!(truncation.to_string().contains("recovered"));
+    }
+
+    #[test]
+    fn garbage_is_not_a_demonstration() {
+        assert!(matches!(read_mcap(b"hello"), Err(DemoError::Format(_))));
+    }
+}
