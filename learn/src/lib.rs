@@ -3,6 +3,7 @@
 //! Learning knows no robot: it reads end-effector and object poses, gripper states and the
 //! teacher's answers, and writes an agent-independent [`akl_tsr::TaskSpec`].
 
+pub mod baselines;
 pub mod calibration;
 pub mod demo;
 pub mod demo_error;
@@ -11,6 +12,7 @@ pub mod dialogue;
 pub mod jsonl;
 pub mod mcap_io;
 pub mod measures;
+pub mod method;
 pub mod okl;
 pub mod session;
 pub mod teach;
@@ -23,3 +25,4 @@ pub use demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrac
 pub use demo_error::DemoError;
 pub use detector::Detector;
 pub use jsonl::{read_jsonl, write_jsonl};
+pub use method::{learn_spec, prepare, LearnOptions, Method};

@@ -34,7 +34,21 @@ pub fn run_session(
     answers: &mut dyn AnswerSource,
     sink: Option<&mut dyn RecordingSink>,
 ) -> Result<Demo, SessionError> {
-    let demo = &sim.demo;
+    stream_demo(&sim.demo, &sim.marked_keyframes, calibration, answers, sink)
+}
+
+/// Streams the frames of a recorded `demo` through a fresh teaching session, marking a keyframe
+/// after each frame listed in `marks` (ascending): the online detector and the dialogue run
+/// exactly as they would have live. The result keeps the demo's frames and header (with the
+/// calibration named `default` when it named none) and carries the new detector states and
+/// dialogue.
+pub fn stream_demo(
+    demo: &Demo,
+    marks: &[usize],
+    calibration: Calibration,
+    answers: &mut dyn AnswerSource,
+    sink: Option<&mut dyn RecordingSink>,
+) -> Result<Demo, SessionError> {
     let names: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
     let mut header = demo.header.clone();
     header
@@ -44,7 +58,7 @@ pub fn run_session(
     if let Some(sink) = sink {
         session = session.with_sink(sink);
     }
-    let mut marks = sim.marked_keyframes.iter().peekable();
+    let mut marks = marks.iter().peekable();
     let mut poses = Vec::with_capacity(names.len());
     for i in 0..demo.len() {
         poses.clear();
