@@ -12,6 +12,8 @@ use std::ops::RangeInclusive;
 pub struct ConstraintParams {
     /// D_F, the online detector's distance filter step (metres).
     pub filter_distance: f64,
+    /// How far a detected region overshoots its line (metres): cut off its end.
+    pub overshoot: f64,
     /// λ of the total variation denoising of the fitting error (metres × frames).
     pub tvd_lambda: f64,
     /// ε added to the largest smoothed error on the true line to get σ (metres).
@@ -51,16 +53,23 @@ pub fn constraint_boundaries(
 ///
 /// A region holds no line when its true-line part spans less than half the filter distance.
 /// That is what is left of a detection that started in the previous segment: the detector
-/// keeps its state for `D_F` past a line that ends at a gripper command, so the clipped tail
-/// in the next segment is about `D_F` long and its true-line part is a point (a real detection
-/// needs `2·D_F` of line before it switches on).
+/// keeps its state for its overshoot past a line that ends at a gripper command, so the
+/// clipped tail in the next segment is about that long and its true-line part is a point (a
+/// real detection needs at least `2·D_F` of line before it switches on).
 pub fn learn_constraint(
     positions: &[Vector3<f64>],
     segment: &Segment,
     region: &RangeInclusive<usize>,
     params: &ConstraintParams,
 ) -> Option<(usize, usize)> {
-    let l = true_line(positions, region, params.filter_distance)?;
+    // A region that reaches the end of its segment was cut there by the gripper command, not
+    // ended by the detector switching off: it has no overshoot to remove.
+    let overshoot = if *region.end() == segment.end {
+        0.0
+    } else {
+        params.overshoot
+    };
+    let l = true_line(positions, region, overshoot)?;
     if (positions[*l.end()] - positions[*l.start()]).norm() < 0.5 * params.filter_distance {
         return None;
     }
@@ -123,6 +132,7 @@ mod tests {
             .unwrap();
         let params = ConstraintParams {
             filter_distance: 0.05,
+            overshoot: 0.05,
             tvd_lambda: 0.002,
             epsilon: 0.001,
         };

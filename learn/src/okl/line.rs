@@ -21,23 +21,23 @@ impl Line {
     }
 }
 
-/// Line 7, `getTrueLine`: the region without its last stretch of length `filter_distance`.
+/// Line 7, `getTrueLine`: the region without its last stretch of length `overshoot`.
 ///
-/// The online detector switches off only once the distance filter has collected a frame
-/// `filter_distance` past the end of the true line, so the region overshoots the line by that
-/// much (thesis §3.3.2): the true-line part is frames `start..=m`, `m` the last frame at least
-/// `filter_distance` from the region's last frame. `None` when no frame is that far (the region
-/// is shorter than the filter distance and holds no reliable line).
+/// The online detector switches off only once the distance filter has collected frames past
+/// the end of the true line, so the region overshoots the line (thesis §3.3.2: by D_F for a
+/// detector that switches on one filtered point): the true-line part is frames `start..=m`,
+/// `m` the last frame at least `overshoot` from the region's last frame. `None` when no frame
+/// is that far (the region is too short to hold a reliable line).
 pub fn true_line(
     positions: &[Vector3<f64>],
     region: &RangeInclusive<usize>,
-    filter_distance: f64,
+    overshoot: f64,
 ) -> Option<RangeInclusive<usize>> {
     let (a, b) = (*region.start(), *region.end());
     let last = positions[b];
     (a..=b)
         .rev()
-        .find(|&m| (positions[m] - last).norm() >= filter_distance)
+        .find(|&m| (positions[m] - last).norm() >= overshoot)
         .map(|m| a..=m)
 }
 

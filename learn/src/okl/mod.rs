@@ -18,6 +18,7 @@ pub mod reference;
 pub mod segment;
 pub mod synth;
 
+use crate::calibration::Calibration;
 use crate::demo::Demo;
 use akl_scene::World;
 use akl_tsr::nalgebra::Vector3;
@@ -70,6 +71,13 @@ pub enum LearnError {
 pub struct OklParams {
     /// D_F, the online detector's distance filter step: 0.05 m (thesis §4.1).
     pub filter_distance: f64,
+    /// How far (metres) a detected region runs on past the end of its line, cut off by
+    /// `getTrueLine`: the distance filter's delay times the filtered points the detector's tank
+    /// needs to switch ([`Calibration::switch_points`]). The thesis cuts one D_F; with the
+    /// shipped calibration the tank needs two points, so the default is 2·D_F = 0.1 m — with one
+    /// D_F, the default teacher's `inspection` lines kept 5 cm of the following reach and their
+    /// ends came out 2–6 cm long (`learn/tests/methods.rs`).
+    pub overshoot: f64,
     /// λ of the TV denoising of the fitting error (metres × frames): 0.002. The error signal
     /// is the perpendicular distance in metres; at 100 Hz and a few mm of hand noise this
     /// flattens the error on the line into one plateau while the rise off the line survives
@@ -88,20 +96,27 @@ pub struct OklParams {
 
 impl Default for OklParams {
     fn default() -> Self {
+        OklParams::for_calibration(&Calibration::default())
+    }
+}
+
+impl OklParams {
+    /// The defaults, with D_F and the overshoot of the detector that ran with `calibration`.
+    pub fn for_calibration(calibration: &Calibration) -> Self {
         OklParams {
-            filter_distance: 0.05,
+            filter_distance: calibration.filter_distance,
+            overshoot: calibration.filter_distance * calibration.switch_points() as f64,
             tvd_lambda: 0.002,
             epsilon: 0.001,
             combine_distance: 0.01,
             bounds: Bounds::symmetric(0.005, 0.05),
         }
     }
-}
 
-impl OklParams {
     fn constraint(&self) -> ConstraintParams {
         ConstraintParams {
             filter_distance: self.filter_distance,
+            overshoot: self.overshoot,
             tvd_lambda: self.tvd_lambda,
             epsilon: self.epsilon,
         }

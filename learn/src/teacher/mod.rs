@@ -5,10 +5,14 @@
 //! carries grasped objects, and — per its [`TeacherProfile`] — sometimes moves straight without
 //! needing to, answers queries wrongly, and marks keyframes with its own habits (for KD).
 
+mod calibration_moves;
 mod motion;
 mod profile;
 mod simulate;
 
+pub use calibration_moves::{
+    calibration_demos, calibration_demos_with, CIRCLE_RADIUS, LINE_LENGTH,
+};
 pub use motion::{min_jerk, Noise};
 pub use profile::{KeyframeHabit, TeacherProfile};
 pub use simulate::{demonstrate, SimulatedDemo};

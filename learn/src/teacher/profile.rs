@@ -23,7 +23,10 @@ pub struct TeacherProfile {
     pub tremor: f64,
     /// Standard deviation of the position sensor's white noise (m).
     pub sensor_noise: f64,
-    /// How far a free motion bows away from the straight line, as a fraction of its length.
+    /// How far a free motion bows away from the straight line (the sagitta of its arc), as a
+    /// fraction of its length: 0.25 makes a 40 cm reach bow 10 cm out, an arc of radius 0.625×
+    /// its length. Much straighter free motion (0.15) is what the dialogue is for: the detector
+    /// takes parts of it for lines.
     pub curvature: f64,
     /// Chance that a free motion is made in an unintended straight line.
     pub unintended_line_chance: f64,
@@ -51,7 +54,7 @@ impl TeacherProfile {
             speed_variation: 0.25,
             tremor: 0.001,
             sensor_noise: 0.0005,
-            curvature: 0.3,
+            curvature: 0.25,
             unintended_line_chance: 0.0,
             wrong_answer_rate: 0.0,
             unknown_answer_rate: 0.0,
@@ -74,7 +77,7 @@ impl TeacherProfile {
             speed_variation: 0.4,
             tremor: 0.002,
             sensor_noise: 0.0005,
-            curvature: 0.25,
+            curvature: 0.2,
             unintended_line_chance: 0.25,
             wrong_answer_rate: 0.2,
             unknown_answer_rate: 0.1,

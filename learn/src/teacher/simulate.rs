@@ -145,6 +145,41 @@ pub fn demonstrate(
     Ok(recorder.out)
 }
 
+/// A circular arc from one point to another, bowing out by its sagitta: a hand's free reach
+/// curves about evenly along its length.
+struct Arc {
+    centre: Vector3<f64>,
+    radius: f64,
+    chord: Vector3<f64>,
+    bow: Vector3<f64>,
+    half_angle: f64,
+}
+
+impl Arc {
+    /// The arc from `p0` to `p1` bulging `sagitta` metres towards `bow` (any vector not along
+    /// the chord); `None` when it degenerates to the chord.
+    fn new(p0: Vector3<f64>, p1: Vector3<f64>, bow: Vector3<f64>, sagitta: f64) -> Option<Arc> {
+        let length = (p1 - p0).norm();
+        let chord = (p1 - p0) / length;
+        let bow = (bow - chord * bow.dot(&chord)).try_normalize(1e-9)?;
+        let h = sagitta.clamp(1e-6, length / 2.0);
+        let radius = (length * length / 4.0 + h * h) / (2.0 * h);
+        Some(Arc {
+            centre: (p0 + p1) / 2.0 - bow * (radius - h),
+            radius,
+            chord,
+            bow,
+            half_angle: (length / (2.0 * radius)).clamp(-1.0, 1.0).asin(),
+        })
+    }
+
+    /// The point a fraction `s` ∈ [0, 1] of the way along the arc.
+    fn at(&self, s: f64) -> Vector3<f64> {
+        let phi = self.half_angle * (2.0 * s - 1.0);
+        self.centre + (self.chord * phi.sin() + self.bow * phi.cos()) * self.radius
+    }
+}
+
 impl Recorder<'_> {
     fn object_index(&self, name: &str) -> Result<usize, String> {
         self.objects
@@ -186,17 +221,17 @@ impl Recorder<'_> {
         let duration = (length / speed)
             .max(angle / ROTATION_SPEED)
             .max(MIN_DURATION);
-        let control = match path {
+        let arc = match path {
             Path::Curved if length > 1e-6 => {
                 let direction = (p1 - p0) / length;
                 let up = Vector3::z() - direction * direction.z;
                 let side = direction.cross(&Vector3::z());
                 let bow = up.try_normalize(1e-9).unwrap_or(side) * 0.8
                     + side.try_normalize(1e-9).unwrap_or(up) * self.rng.gen_range(-0.6..0.6);
-                let bulge = self.profile.curvature * length * self.rng.gen_range(0.8..1.2);
-                (p0 + p1) / 2.0 + bow.normalize() * bulge
+                let sagitta = self.profile.curvature * length * self.rng.gen_range(0.8..1.2);
+                Arc::new(p0, p1, bow, sagitta)
             }
-            _ => (p0 + p1) / 2.0,
+            _ => None,
         };
         let (intended, unintended) = match path {
             Path::Straight { intended } => (intended, !intended && length > 1e-6),
@@ -206,7 +241,10 @@ impl Recorder<'_> {
         let steps = (duration / dt).ceil() as usize;
         for k in 1..=steps {
             let s = min_jerk(k as f64 / steps as f64);
-            let position = (1.0 - s) * (1.0 - s) * p0 + 2.0 * s * (1.0 - s) * control + s * s * p1;
+            let position = match &arc {
+                Some(arc) => arc.at(s),
+                None => p0 + (p1 - p0) * s,
+            };
             let rotation = start.rotation.slerp(&target.rotation, s);
             self.pose = Pose::from_parts(Translation3::from(position), rotation);
             self.t += dt;
