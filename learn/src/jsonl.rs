@@ -6,6 +6,7 @@
 //! is `{"t": 3.2, "event": "query" | "answer" | "suggestion" | "keyframe", "value": ...}`.
 
 use std::collections::BTreeMap;
+use std::io::Write;
 
 use akl_tsr::{Gripper, Pose, PoseJson};
 use serde::{Deserialize, Serialize};
@@ -14,6 +15,7 @@ use crate::demo::{
     Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION,
 };
 use crate::demo_error::DemoError;
+use crate::session::RecordingSink;
 use crate::validate::FrameChecker;
 
 /// One frame line as written.
@@ -48,6 +50,82 @@ enum EventName {
     Keyframe,
 }
 
+/// One line of a JSONL demonstration after the header, parsed and checked on its own.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Record {
+    /// A frame: time, end-effector pose, gripper, object poses (sorted by name) and, when the
+    /// recorder ran the online detector, its state.
+    Frame {
+        /// Time (s).
+        t: f64,
+        /// End-effector pose.
+        ee: Pose,
+        /// Gripper state.
+        gripper: Gripper,
+        /// Object poses by name, in name order.
+        objects: Vec<(String, Pose)>,
+        /// The detector state, when recorded.
+        constrained: Option<bool>,
+    },
+    /// A dialogue event or a keyframe mark.
+    Event {
+        /// Time (s).
+        t: f64,
+        /// What happened.
+        kind: DialogueKind,
+    },
+}
+
+/// Parses the header line; the message says what is wrong.
+pub fn parse_header(line: &str) -> Result<DemoHeader, String> {
+    let header: DemoHeader = serde_json::from_str(line)
+        .map_err(|e| format!("not an `akl_demo` header: {}", plain(&e, line)))?;
+    if header.akl_demo != DEMO_VERSION {
+        return Err(format!(
+            "unsupported akl_demo version {} (this build reads {DEMO_VERSION})",
+            header.akl_demo
+        ));
+    }
+    Ok(header)
+}
+
+/// Parses a frame or event line; the message says what is wrong.
+pub fn parse_record(line: &str) -> Result<Record, String> {
+    let value: serde_json::Value = serde_json::from_str(line).map_err(|e| plain(&e, line))?;
+    if value.get("event").is_some() {
+        let event: EventLine = serde_json::from_value(value).map_err(|e| e.to_string())?;
+        if !event.t.is_finite() {
+            return Err(format!("event time {} is not finite", event.t));
+        }
+        let kind = match (event.event, event.value) {
+            (EventName::Answer, Some(a)) => DialogueKind::Answer(a),
+            (EventName::Answer, None) => {
+                return Err("an answer needs a `value` (yes, no or unknown)".into())
+            }
+            (EventName::Query, _) => DialogueKind::Query,
+            (EventName::Suggestion, _) => DialogueKind::Suggestion,
+            (EventName::Keyframe, _) => DialogueKind::Keyframe,
+        };
+        return Ok(Record::Event { t: event.t, kind });
+    }
+    let frame: FrameLine = serde_json::from_value(value).map_err(|e| e.to_string())?;
+    let ee = frame.ee.to_pose().map_err(|e| format!("ee: {e}"))?;
+    let mut objects = Vec::with_capacity(frame.objects.len());
+    for (name, pose) in frame.objects {
+        let pose = pose
+            .to_pose()
+            .map_err(|e| format!("object `{name}`: {e}"))?;
+        objects.push((name, pose));
+    }
+    Ok(Record::Frame {
+        t: frame.t,
+        ee,
+        gripper: frame.gripper,
+        objects,
+        constrained: frame.constrained,
+    })
+}
+
 /// Reads a JSONL demonstration; errors name the 1-based line.
 pub fn read_jsonl(text: &str) -> Result<Demo, DemoError> {
     let mut lines = text
@@ -57,35 +135,24 @@ pub fn read_jsonl(text: &str) -> Result<Demo, DemoError> {
     let (_, first) = lines.next().ok_or(DemoError::Format(
         "the file is empty: expected an `akl_demo` header line".into(),
     ))?;
-    let header: DemoHeader = serde_json::from_str(first).map_err(|e| DemoError::Line {
-        line: 1,
-        message: format!("not an `akl_demo` header: {}", plain(&e, first)),
-    })?;
-    if header.akl_demo != DEMO_VERSION {
-        return Err(DemoError::Line {
-            line: 1,
-            message: format!(
-                "unsupported akl_demo version {} (this build reads {DEMO_VERSION})",
-                header.akl_demo
-            ),
-        });
-    }
+    let header = parse_header(first).map_err(|message| DemoError::Line { line: 1, message })?;
     let mut builder = DemoBuilder::new(header);
     for (index, line) in lines {
-        let number = index + 1;
         let at = |message: String| DemoError::Line {
-            line: number,
+            line: index + 1,
             message,
         };
-        let value: serde_json::Value =
-            serde_json::from_str(line).map_err(|e| at(plain(&e, line)))?;
-        if value.get("event").is_some() {
-            let event: EventLine = serde_json::from_value(value).map_err(|e| at(e.to_string()))?;
-            builder.event(event).map_err(at)?;
-        } else {
-            let frame: FrameLine = serde_json::from_value(value).map_err(|e| at(e.to_string()))?;
-            builder.frame(frame).map_err(at)?;
+        match parse_record(line).map_err(at)? {
+            Record::Frame {
+                t,
+                ee,
+                gripper,
+                objects,
+                constrained,
+            } => builder.frame(t, ee, gripper, objects, constrained),
+            Record::Event { t, kind } => builder.event(t, kind),
         }
+        .map_err(at)?;
     }
     builder.finish()
 }
@@ -93,11 +160,47 @@ pub fn read_jsonl(text: &str) -> Result<Demo, DemoError> {
 /// Writes a demonstration as JSONL: header, then frames and events merged in time order
 /// (an event at the same time as a frame follows it).
 pub fn write_jsonl(demo: &Demo) -> String {
-    let mut out = String::new();
-    out.push_str(&serde_json::to_string(&demo.header).expect("a header serializes"));
-    out.push('\n');
-    let mut events = demo.events.iter().peekable();
-    for i in 0..demo.len() {
+    let mut out = Vec::new();
+    let written = JsonlDemoWriter::new(&mut out, &demo.header).and_then(|mut w| {
+        let mut events = demo.events.iter().peekable();
+        for i in 0..demo.len() {
+            w.write_frame(demo, i)?;
+            while let Some(event) = events.next_if(|e| e.frame <= i) {
+                w.write_event(event)?;
+            }
+        }
+        for event in events {
+            w.write_event(event)?;
+        }
+        w.finish()
+    });
+    // Writing into memory cannot fail, and serde_json writes valid UTF-8.
+    written.expect("writing to memory");
+    String::from_utf8(out).expect("JSON is UTF-8")
+}
+
+/// Streams a demonstration into JSONL as it is recorded: a line per frame and per event,
+/// flushed at every event and at least once a second of demonstration time, so a killed
+/// recording keeps everything but its last second.
+pub struct JsonlDemoWriter<W: Write> {
+    out: W,
+    last_flush: f64,
+}
+
+impl<W: Write> JsonlDemoWriter<W> {
+    /// Starts a recording with its header line.
+    pub fn new(mut out: W, header: &DemoHeader) -> std::io::Result<Self> {
+        serde_json::to_writer(&mut out, header)?;
+        out.write_all(b"\n")?;
+        out.flush()?;
+        Ok(JsonlDemoWriter {
+            out,
+            last_flush: f64::NEG_INFINITY,
+        })
+    }
+
+    /// Writes frame `i` of `demo` (with its detector state when it has one).
+    pub fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
         let frame = FrameLine {
             t: demo.times[i],
             ee: PoseJson::from_pose(&demo.ee[i]),
@@ -109,32 +212,48 @@ pub fn write_jsonl(demo: &Demo) -> String {
                 .collect(),
             constrained: demo.detector.get(i).copied(),
         };
-        out.push_str(&serde_json::to_string(&frame).expect("a frame serializes"));
-        out.push('\n');
-        while let Some(event) = events.next_if(|e| e.frame <= i) {
-            push_event(&mut out, event);
+        serde_json::to_writer(&mut self.out, &frame)?;
+        self.out.write_all(b"\n")?;
+        if frame.t - self.last_flush >= 1.0 {
+            self.out.flush()?;
+            self.last_flush = frame.t;
         }
+        Ok(())
     }
-    for event in events {
-        push_event(&mut out, event);
+
+    /// Writes a dialogue event or keyframe mark.
+    pub fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+        let (name, value) = match event.kind {
+            DialogueKind::Query => (EventName::Query, None),
+            DialogueKind::Answer(a) => (EventName::Answer, Some(a)),
+            DialogueKind::Suggestion => (EventName::Suggestion, None),
+            DialogueKind::Keyframe => (EventName::Keyframe, None),
+        };
+        let line = EventLine {
+            t: event.t,
+            event: name,
+            value,
+        };
+        serde_json::to_writer(&mut self.out, &line)?;
+        self.out.write_all(b"\n")?;
+        self.out.flush()
     }
-    out
+
+    /// Flushes and returns the underlying writer.
+    pub fn finish(mut self) -> std::io::Result<W> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
 }
 
-fn push_event(out: &mut String, event: &DialogueEvent) {
-    let (name, value) = match event.kind {
-        DialogueKind::Query => (EventName::Query, None),
-        DialogueKind::Answer(a) => (EventName::Answer, Some(a)),
-        DialogueKind::Suggestion => (EventName::Suggestion, None),
-        DialogueKind::Keyframe => (EventName::Keyframe, None),
-    };
-    let line = EventLine {
-        t: event.t,
-        event: name,
-        value,
-    };
-    out.push_str(&serde_json::to_string(&line).expect("an event serializes"));
-    out.push('\n');
+impl<W: Write> RecordingSink for JsonlDemoWriter<W> {
+    fn frame(&mut self, demo: &Demo, index: usize) -> std::io::Result<()> {
+        self.write_frame(demo, index)
+    }
+
+    fn event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+        self.write_event(event)
+    }
 }
 
 /// A serde_json message without its position (the caller names the line).
@@ -166,19 +285,17 @@ impl DemoBuilder {
         }
     }
 
-    fn frame(&mut self, frame: FrameLine) -> Result<(), String> {
-        let ee = frame.ee.to_pose().map_err(|e| format!("ee: {e}"))?;
-        let mut objects: Vec<(String, Pose)> = Vec::with_capacity(frame.objects.len());
-        for (name, pose) in &frame.objects {
-            objects.push((
-                name.clone(),
-                pose.to_pose()
-                    .map_err(|e| format!("object `{name}`: {e}"))?,
-            ));
-        }
+    fn frame(
+        &mut self,
+        t: f64,
+        ee: Pose,
+        gripper: Gripper,
+        objects: Vec<(String, Pose)>,
+        constrained: Option<bool>,
+    ) -> Result<(), String> {
         let names: Vec<&str> = objects.iter().map(|(n, _)| n.as_str()).collect();
-        self.checker.check(frame.t, &names)?;
-        match (self.detector_given, frame.constrained) {
+        self.checker.check(t, &names)?;
+        match (self.detector_given, constrained) {
             (None, c) => self.detector_given = Some(c.is_some()),
             (Some(true), None) | (Some(false), Some(_)) => {
                 return Err("`constrained` must be given on every frame or on none".into())
@@ -197,42 +314,26 @@ impl DemoBuilder {
         for (track, (_, pose)) in self.demo.objects.iter_mut().zip(objects) {
             track.poses.push(pose);
         }
-        self.demo.times.push(frame.t);
+        self.demo.times.push(t);
         self.demo.ee.push(ee);
-        self.demo.gripper.push(frame.gripper);
-        if let Some(c) = frame.constrained {
+        self.demo.gripper.push(gripper);
+        if let Some(c) = constrained {
             self.demo.detector.push(c);
         }
         Ok(())
     }
 
-    fn event(&mut self, event: EventLine) -> Result<(), String> {
-        if !event.t.is_finite() {
-            return Err(format!("event time {} is not finite", event.t));
-        }
-        let kind = match (event.event, event.value) {
-            (EventName::Answer, Some(a)) => DialogueKind::Answer(a),
-            (EventName::Answer, None) => {
-                return Err("an answer needs a `value` (yes, no or unknown)".into())
-            }
-            (EventName::Query, _) => DialogueKind::Query,
-            (EventName::Suggestion, _) => DialogueKind::Suggestion,
-            (EventName::Keyframe, _) => DialogueKind::Keyframe,
-        };
+    fn event(&mut self, t: f64, kind: DialogueKind) -> Result<(), String> {
         if let Some(last) = self.demo.events.last() {
-            if event.t < last.t {
+            if t < last.t {
                 return Err(format!(
-                    "event time {} goes back before the previous event ({})",
-                    event.t, last.t
+                    "event time {t} goes back before the previous event ({})",
+                    last.t
                 ));
             }
         }
-        let frame = frame_at(&self.demo.times, event.t);
-        self.demo.events.push(DialogueEvent {
-            t: event.t,
-            frame,
-            kind,
-        });
+        let frame = frame_at(&self.demo.times, t);
+        self.demo.events.push(DialogueEvent { t, frame, kind });
         Ok(())
     }
 

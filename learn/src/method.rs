@@ -15,7 +15,7 @@ use crate::demo::Demo;
 use crate::dialogue::AnswerSource;
 use crate::okl::{self, LearnError, OklParams};
 use crate::session::SessionError;
-use crate::teach::stream_demo;
+use crate::teach::{session_header, stream_demo, Pace};
 
 /// A way of learning a spec from a demonstration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -107,7 +107,17 @@ pub fn prepare(
         return Ok(demo);
     }
     let marks = marked_frames(&demo);
-    stream_demo(&demo, &marks, calibration, answers, None)
+    let header = session_header(&demo.header, None);
+    let (replayed, _) = stream_demo(
+        &demo,
+        header,
+        &marks,
+        calibration,
+        answers,
+        None,
+        &Pace::default(),
+    )?;
+    Ok(replayed)
 }
 
 #[cfg(test)]

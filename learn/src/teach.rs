@@ -1,11 +1,14 @@
 //! Teaching with the simulated teacher: its recording streamed through a [`TeachingSession`]
 //! frame by frame, exactly as a live teacher's would be.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::calibration::Calibration;
-use crate::demo::Demo;
+use crate::demo::{Demo, DemoHeader};
 use crate::dialogue::{AnswerSource, Oracle};
 use crate::session::{RecordingSink, SessionError, TeachingSession};
 use crate::teacher::{SimulatedDemo, TeacherProfile};
@@ -34,41 +37,83 @@ pub fn run_session(
     answers: &mut dyn AnswerSource,
     sink: Option<&mut dyn RecordingSink>,
 ) -> Result<Demo, SessionError> {
-    stream_demo(&sim.demo, &sim.marked_keyframes, calibration, answers, sink)
+    let header = session_header(&sim.demo.header, None);
+    let pace = Pace::default();
+    let (demo, _) = stream_demo(
+        &sim.demo,
+        header,
+        &sim.marked_keyframes,
+        calibration,
+        answers,
+        sink,
+        &pace,
+    )?;
+    Ok(demo)
 }
 
-/// Streams the frames of a recorded `demo` through a fresh teaching session, marking a keyframe
-/// after each frame listed in `marks` (ascending): the online detector and the dialogue run
-/// exactly as they would have live. The result keeps the demo's frames and header (with the
-/// calibration named `default` when it named none) and carries the new detector states and
-/// dialogue.
+/// The header of a session recording `recorded`: the same, naming the calibration used
+/// (`calibration`, or what the recording named, or `default`).
+pub fn session_header(recorded: &DemoHeader, calibration: Option<&str>) -> DemoHeader {
+    let mut header = recorded.clone();
+    header.calibration = calibration
+        .map(str::to_string)
+        .or(header.calibration)
+        .or_else(|| Some("default".to_string()));
+    header
+}
+
+/// How a recorded demonstration is played into a session.
+#[derive(Debug, Default)]
+pub struct Pace<'a> {
+    /// Play frames at the pace of their timestamps (as a live teacher would), instead of as
+    /// fast as possible.
+    pub realtime: bool,
+    /// Stop early, keeping what was played, once this is set (e.g. by Ctrl-C).
+    pub stop: Option<&'a AtomicBool>,
+}
+
+/// Streams the frames of a recorded `demo` through a fresh teaching session recording under
+/// `header`, marking a keyframe after each frame listed in `marks` (ascending): the online
+/// detector and the dialogue run exactly as they would have live. Returns the session's
+/// recording (the demo's frames with the new detector states and dialogue) and whether `pace`
+/// stopped it early.
 pub fn stream_demo(
     demo: &Demo,
+    header: DemoHeader,
     marks: &[usize],
     calibration: Calibration,
     answers: &mut dyn AnswerSource,
     sink: Option<&mut dyn RecordingSink>,
-) -> Result<Demo, SessionError> {
+    pace: &Pace,
+) -> Result<(Demo, bool), SessionError> {
     let names: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
-    let mut header = demo.header.clone();
-    header
-        .calibration
-        .get_or_insert_with(|| "default".to_string());
     let mut session = TeachingSession::new(header, &names, calibration, answers);
     if let Some(sink) = sink {
         session = session.with_sink(sink);
     }
     let mut marks = marks.iter().peekable();
     let mut poses = Vec::with_capacity(names.len());
+    let started = Instant::now();
+    let mut stopped = false;
     for i in 0..demo.len() {
+        if pace.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            stopped = true;
+            break;
+        }
+        if pace.realtime {
+            let due = Duration::from_secs_f64((demo.times[i] - demo.times[0]).max(0.0));
+            if let Some(wait) = due.checked_sub(started.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
         poses.clear();
         poses.extend(demo.objects.iter().map(|o| o.poses[i]));
         session.push(demo.times[i], demo.ee[i], demo.gripper[i], &poses)?;
-        while marks.next_if(|m| **m == i).is_some() {
+        while marks.next_if(|m| **m <= i).is_some() {
             session.mark_keyframe()?;
         }
     }
-    session.finish()
+    Ok((session.finish()?, stopped))
 }
 
 #[cfg(test)]

@@ -9,6 +9,11 @@ pub struct FrameChecker {
 }
 
 impl FrameChecker {
+    /// The objects of the frames checked so far (empty before the first frame).
+    pub fn objects(&self) -> &[String] {
+        self.objects.as_deref().unwrap_or(&[])
+    }
+
     /// Checks the next frame's time and object names; the message says what is wrong.
     pub fn check(&mut self, t: f64, objects: &[&str]) -> Result<(), String> {
         if !t.is_finite() {
