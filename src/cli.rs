@@ -22,6 +22,155 @@ pub enum Command {
     /// Validate and inspect task specifications (spec.json).
     #[command(subcommand)]
     Spec(SpecCommand),
+    /// Fit a teacher's online-detector calibration from a straight line and a circle.
+    Calibrate(CalibrateArgs),
+    /// Record a demonstration while the online detector asks about straight lines.
+    Teach(TeachArgs),
+    /// Learn a task spec from a recorded demonstration (AKL, or the KD and mACL baselines).
+    Learn(LearnArgs),
+    /// Score a learned spec against a ground truth (keyframe, pose and constraint accuracy).
+    Score(ScoreArgs),
+}
+
+/// `akl calibrate`
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "The line is labelled constrained and the circle unconstrained; the \
+logistic model of the switching probability (β0, β1) is fitted to them by maximum likelihood, \
+and the energy tank's dissipation T_d and threshold T_s follow from the fitted model on the same \
+data. Without a calibration, `akl teach` uses the one fitted to the simulated default teacher."
+)]
+pub struct CalibrateArgs {
+    /// Demonstration of a straight line (JSONL or MCAP).
+    #[arg(
+        long,
+        required_unless_present = "simulate",
+        conflicts_with = "simulate"
+    )]
+    pub line: Option<PathBuf>,
+    /// Demonstration of a circle (JSONL or MCAP).
+    #[arg(
+        long,
+        required_unless_present = "simulate",
+        conflicts_with = "simulate"
+    )]
+    pub circle: Option<PathBuf>,
+    /// Calibrate a simulated teacher instead (see --profile and --seed).
+    #[arg(long)]
+    pub simulate: bool,
+    /// Simulated teacher profile: default, careful, novice or straight.
+    #[arg(long, default_value = "default", requires = "simulate")]
+    pub profile: String,
+    /// Seed of the simulated teacher's movements.
+    #[arg(long, default_value_t = 0, requires = "simulate")]
+    pub seed: u64,
+    /// Where to write the calibration (JSON).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Who demonstrates in `akl teach`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Teacher {
+    /// The simulated teacher, following the task's teaching steps.
+    Sim,
+    /// A robot driver streaming JSONL frames on standard input.
+    Stdin,
+}
+
+/// `akl teach`
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "ANSWERS is `oracle` (a simulated teacher who knows the task's true \
+lines and errs at its profile's rate; --teacher sim only), `all-yes`, `terminal` (asked on \
+/dev/tty: y, n or ? then Enter), or a list such as `yes,no,unknown` used in order. Defaults: \
+oracle with --teacher sim, terminal with --teacher stdin.
+
+The recording streams into OUTPUT.partial and is renamed to OUTPUT when complete; a killed \
+recording leaves OUTPUT.partial, which `akl learn` reads up to its last second. Ctrl-C ends a \
+recording cleanly. The spec learned with AKL is written next to it as <OUTPUT stem>.spec.json."
+)]
+pub struct TeachArgs {
+    /// Task: a built-in name or a task file (required with --teacher sim).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// Who demonstrates.
+    #[arg(long, value_enum, default_value = "sim")]
+    pub teacher: Teacher,
+    /// Simulated teacher profile: default, careful, novice or straight.
+    #[arg(long, default_value = "default")]
+    pub profile: String,
+    /// Seed of the simulated teacher.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Who answers the learner's questions (see below).
+    #[arg(long)]
+    pub answers: Option<String>,
+    /// Calibration file from `akl calibrate` (default: the shipped one).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Play the simulated teacher in real time instead of as fast as possible.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Where to record the demonstration: a .mcap or .jsonl file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `akl learn`
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "A demonstration recorded without the online detector (e.g. a JSONL file \
+from another driver) is first replayed through it for AKL; its questions are answered by \
+--answers (all-yes, terminal or a list such as yes,no)."
+)]
+pub struct LearnArgs {
+    /// The demonstration (JSONL or MCAP, also a .partial file of a killed recording).
+    pub demo: PathBuf,
+    /// Learning method: akl, kd or macl.
+    #[arg(long, default_value = "akl")]
+    pub method: String,
+    /// Task whose world grounds the keyframes (default: the demo's task, when built in).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// Calibration the detector ran with (default: the shipped one).
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Answers for replaying the detector over a demo recorded without it.
+    #[arg(long)]
+    pub answers: Option<String>,
+    /// Where to write the spec (JSON).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Print the spec and timing as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `akl score`
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Keyframes are paired in order (longest common subsequence): a keyframe \
+matches when kind, reference, gripper and constraint agree, a pose when its target is within \
+2 cm and 0.2 rad after grounding both specs on the truth's object poses. Accuracies are \
+intersection over union; constraint accuracy compares line lengths. Success means the learned \
+spec equals the truth. Exit code 0 whatever the score."
+)]
+pub struct ScoreArgs {
+    /// The learned spec.
+    pub spec: PathBuf,
+    /// The ground truth: a spec file, or a built-in task name for its ground truth.
+    #[arg(long)]
+    pub truth: String,
+    /// Print the measures as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `akl task ...`

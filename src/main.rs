@@ -3,9 +3,11 @@
 //! The binary only parses arguments, calls the library crates and prints; every algorithm
 //! lives in a crate.
 
+mod answers;
 mod cli;
 mod commands;
 mod exit;
+mod stop;
 mod table;
 
 use clap::Parser;

@@ -87,6 +87,19 @@ impl Default for Calibration {
     }
 }
 
+/// How a calibration classifies calibration data, filtered point by filtered point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Separation {
+    /// Filtered points of the line.
+    pub line_points: usize,
+    /// Of those, classified constrained.
+    pub line_right: usize,
+    /// Filtered points of the circle.
+    pub circle_points: usize,
+    /// Of those, classified unconstrained.
+    pub circle_right: usize,
+}
+
 /// Why calibration failed.
 #[derive(Debug, Error, PartialEq)]
 pub enum CalibrationError {
@@ -206,6 +219,37 @@ impl Calibration {
             return 1;
         }
         (self.tank_threshold / per_point).ceil().clamp(1.0, 100.0) as u32
+    }
+
+    /// The line distance error (m) at which motion is as likely constrained as not.
+    pub fn boundary(&self) -> f64 {
+        -self.beta0 / self.beta1
+    }
+
+    /// How this calibration classifies the filtered points of a line and a circle.
+    pub fn separation(&self, line: &[Vector3<f64>], circle: &[Vector3<f64>]) -> Separation {
+        let classify = |positions: &[Vector3<f64>], unconstrained: bool| {
+            let errors = filtered_errors(positions, self.filter_distance);
+            let right = errors
+                .iter()
+                .filter(|d| (self.probability_unconstrained(**d) > 0.5) == unconstrained)
+                .count();
+            (errors.len(), right)
+        };
+        let (line_points, line_right) = classify(line, false);
+        let (circle_points, circle_right) = classify(circle, true);
+        Separation {
+            line_points,
+            line_right,
+            circle_points,
+            circle_right,
+        }
+    }
+
+    /// Writes the calibration file atomically.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        let text = akl_tsr::io::to_readable_json(self).map_err(std::io::Error::other)?;
+        akl_tsr::io::write_atomic(path, text.as_bytes())
     }
 
     /// Reads a calibration file.

@@ -89,12 +89,12 @@ pub fn score(learned: &TaskSpec, truth: &TaskSpec, tol: &Tolerance) -> Scores {
         }
     };
     let (ll, tl) = (lines(l), lines(t));
-    let learned_line_length: f64 = ll.iter().map(|(a, b)| (b - a).norm()).sum();
-    let true_line_length: f64 = tl.iter().map(|(a, b)| (b - a).norm()).sum();
-    let common_line_length: f64 = tl
-        .iter()
-        .flat_map(|tr| ll.iter().map(move |lr| common_length(lr, tr, tol)))
-        .sum();
+    let learned_line_length = total(ll.iter().map(|(a, b)| (b - a).norm()));
+    let true_line_length = total(tl.iter().map(|(a, b)| (b - a).norm()));
+    let common_line_length = total(
+        tl.iter()
+            .flat_map(|tr| ll.iter().map(move |lr| common_length(lr, tr, tol))),
+    );
     let constraint_accuracy = if ll.is_empty() && tl.is_empty() {
         None
     } else {
@@ -120,6 +120,11 @@ pub fn score(learned: &TaskSpec, truth: &TaskSpec, tol: &Tolerance) -> Scores {
         success: differences.is_empty(),
         differences,
     }
+}
+
+/// A sum of lengths that is +0 when empty (`Iterator::sum` gives −0, which prints as "-0").
+fn total(lengths: impl Iterator<Item = f64>) -> f64 {
+    lengths.fold(0.0, |a, b| a + b)
 }
 
 /// `learned` with each keyframe's `t0_w` replaced by the truth's pose of the same reference.

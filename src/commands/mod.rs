@@ -1,16 +1,48 @@
 //! One module per top-level command.
 
+mod calibrate;
+mod learn;
+mod score;
 mod spec;
 mod task;
+mod teach;
 
 use crate::cli::{Cli, Command};
-use crate::exit::CliResult;
+use crate::exit::{CliError, CliResult};
+use akl_learn::calibration::Calibration;
+use akl_learn::teacher::TeacherProfile;
+use std::path::Path;
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> CliResult {
     match cli.command {
         Command::Task(cmd) => task::run(cmd),
         Command::Spec(cmd) => spec::run(cmd),
+        Command::Calibrate(args) => calibrate::run(args),
+        Command::Teach(args) => teach::run(args),
+        Command::Learn(args) => learn::run(args),
+        Command::Score(args) => score::run(args),
+    }
+}
+
+/// A simulated teacher profile by name; the error lists the names.
+pub(crate) fn profile(name: &str) -> Result<TeacherProfile, CliError> {
+    TeacherProfile::named(name).ok_or_else(|| {
+        CliError::input(format!(
+            "unknown teacher profile `{name}` (use {})",
+            TeacherProfile::NAMES.join(", ")
+        ))
+    })
+}
+
+/// The calibration in `path`, or the shipped default; with the label a recording names it by.
+pub(crate) fn load_calibration(path: Option<&Path>) -> Result<(Calibration, String), CliError> {
+    match path {
+        Some(p) => Ok((
+            Calibration::load(p).map_err(CliError::input)?,
+            p.display().to_string(),
+        )),
+        None => Ok((Calibration::default(), "default".into())),
     }
 }
 

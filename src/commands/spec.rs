@@ -115,6 +115,13 @@ fn show(file: &Path, json: bool) -> CliResult {
         spec.method,
         spec.keyframes.len()
     );
+    print!("{}", keyframe_table(&spec).render());
+    Ok(())
+}
+
+/// The keyframes of `spec`, one row each: kind, reference, gripper, constraint, demo time,
+/// the end-effector offset in the reference and the world target.
+pub(crate) fn keyframe_table(spec: &TaskSpec) -> Table {
     let mut table = Table::new([
         "#",
         "kind",
@@ -145,8 +152,7 @@ fn show(file: &Path, json: bool) -> CliResult {
             vec3(&kf.tsr.nominal().translation.vector),
         ]);
     }
-    print!("{}", table.render());
-    Ok(())
+    table
 }
 
 /// Whole degrees, without the "-0" that rounding a tiny negative angle gives.

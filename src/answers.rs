@@ -1,0 +1,48 @@
+//! Who answers the learner's questions, from the `--answers` option.
+
+use std::fs::{File, OpenOptions};
+use std::io::BufReader;
+
+use akl_learn::dialogue::{AllYes, AnswerSource, ListedAnswers, Terminal};
+use akl_learn::teach::oracle_for;
+use akl_learn::teacher::{SimulatedDemo, TeacherProfile};
+
+use crate::exit::CliError;
+
+/// The terminal the questions are asked on: the controlling terminal, so that a demonstration
+/// can stream in on standard input at the same time.
+const TTY: &str = "/dev/tty";
+
+/// The answer source `spec` names: `oracle` (needs the simulated teacher), `all-yes`,
+/// `terminal`, or a comma-separated list of yes / no / unknown.
+pub fn answer_source(
+    spec: &str,
+    simulated: Option<(&SimulatedDemo, &TeacherProfile, u64)>,
+) -> Result<Box<dyn AnswerSource>, CliError> {
+    match spec {
+        "oracle" => {
+            let (sim, profile, seed) = simulated.ok_or_else(|| {
+                CliError::input(
+                    "--answers oracle needs the simulated teacher (--teacher sim): only it knows the task's true lines",
+                )
+            })?;
+            Ok(Box::new(oracle_for(sim, profile, seed)))
+        }
+        "all-yes" => Ok(Box::new(AllYes)),
+        "terminal" => {
+            let open = |e: std::io::Error| {
+                CliError::input(format!(
+                    "cannot open the terminal {TTY} to ask questions ({e}); pass --answers with a list or all-yes"
+                ))
+            };
+            let input = File::open(TTY).map_err(open)?;
+            let output = OpenOptions::new().write(true).open(TTY).map_err(open)?;
+            Ok(Box::new(Terminal::new(BufReader::new(input), output)))
+        }
+        list => Ok(Box::new(ListedAnswers::parse(list).map_err(|e| {
+            CliError::input(format!(
+                "--answers: {e} (or use oracle, all-yes or terminal)"
+            ))
+        })?)),
+    }
+}

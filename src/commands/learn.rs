@@ -1,0 +1,94 @@
+//! `akl learn`.
+
+use super::{load_calibration, print_json, spec::keyframe_table};
+use crate::answers::answer_source;
+use crate::cli::LearnArgs;
+use crate::exit::{CliError, CliResult};
+use akl_learn::method::needs_replay;
+use akl_learn::okl::OklParams;
+use akl_learn::recording::read_demo_file;
+use akl_learn::{learn_spec, prepare, LearnOptions, Method};
+use akl_scene::builtin;
+use akl_tsr::TaskSpec;
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Serialize)]
+struct Learned<'a> {
+    demo: String,
+    method: Method,
+    frames: usize,
+    replayed_detector: bool,
+    runtime_s: f64,
+    output: Option<String>,
+    spec: &'a TaskSpec,
+}
+
+pub fn run(args: LearnArgs) -> CliResult {
+    let method: Method = args.method.parse().map_err(CliError::input)?;
+    let loaded = read_demo_file(&args.demo).map_err(CliError::input)?;
+    if let Some(t) = &loaded.truncation {
+        eprintln!("warning: {}: {t}", args.demo.display());
+    }
+    let mut demo = loaded.demo;
+    let task = match &args.task {
+        Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
+        None => builtin::task(&demo.header.task)
+            .transpose()
+            .map_err(CliError::internal)?,
+    };
+    let (calibration, _) = load_calibration(args.calibration.as_deref())?;
+    let replayed = needs_replay(method, &demo);
+    if replayed {
+        let Some(spec) = &args.answers else {
+            return Err(CliError::input(format!(
+                "{}: recorded without the online detector; pass --answers (all-yes, terminal or a list such as yes,no) to replay it",
+                args.demo.display()
+            )));
+        };
+        let mut answers = answer_source(spec, None)?;
+        demo = prepare(method, demo, calibration, answers.as_mut())
+            .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
+    }
+    let options = LearnOptions {
+        okl: OklParams::for_calibration(&calibration),
+        ..LearnOptions::default()
+    };
+    let started = Instant::now();
+    let spec = learn_spec(method, &demo, task.as_ref().map(|t| &t.world), &options)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
+    let runtime = started.elapsed().as_secs_f64();
+    if let Some(out) = &args.output {
+        spec.save(out)
+            .map_err(|e| CliError::internal(format!("{}: {e}", out.display())))?;
+    }
+    let learned = Learned {
+        demo: args.demo.display().to_string(),
+        method,
+        frames: demo.len(),
+        replayed_detector: replayed,
+        runtime_s: runtime,
+        output: args.output.as_ref().map(|p| p.display().to_string()),
+        spec: &spec,
+    };
+    if args.json {
+        return print_json(&learned);
+    }
+    println!(
+        "{}: {} frames, learned with {} in {:.2} ms{}",
+        learned.demo,
+        learned.frames,
+        method,
+        runtime * 1e3,
+        if replayed {
+            " (after replaying the online detector)"
+        } else {
+            ""
+        }
+    );
+    print!("{}", keyframe_table(&spec).render());
+    if let Some(out) = &learned.output {
+        println!("wrote {out}");
+    }
+    Ok(())
+}

@@ -1,0 +1,225 @@
+//! `akl teach`.
+
+use super::{load_calibration, print_json, profile, spec::keyframe_table};
+use crate::answers::answer_source;
+use crate::cli::{TeachArgs, Teacher};
+use crate::exit::{CliError, CliResult};
+use crate::stop::on_ctrl_c;
+use akl_learn::calibration::Calibration;
+use akl_learn::demo::{Answer, DialogueKind};
+use akl_learn::live::{LiveEnd, LiveStream};
+use akl_learn::okl::OklParams;
+use akl_learn::recording::Recording;
+use akl_learn::session::TeachingSession;
+use akl_learn::teach::{session_header, stream_demo, Pace};
+use akl_learn::teacher::demonstrate;
+use akl_learn::{learn_spec, Demo, LearnOptions, Method};
+use akl_scene::{builtin, Task};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Serialize, Default)]
+struct AnswerCounts {
+    yes: usize,
+    no: usize,
+    unknown: usize,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    recording: String,
+    task: String,
+    frames: usize,
+    duration_s: f64,
+    queries: usize,
+    answers: AnswerCounts,
+    suggestions: usize,
+    keyframe_marks: usize,
+    stopped_early: bool,
+    spec: Option<String>,
+    keyframes: Option<usize>,
+    learn_error: Option<String>,
+}
+
+pub fn run(args: TeachArgs) -> CliResult {
+    let (calibration, label) = load_calibration(args.calibration.as_deref())?;
+    let stop = on_ctrl_c();
+    let (demo, recording, stopped, task) = match args.teacher {
+        Teacher::Sim => teach_simulated(&args, calibration, &label, stop)?,
+        Teacher::Stdin => teach_live(&args, calibration, &label, stop)?,
+    };
+    let spec_path = args.output.with_extension("spec.json");
+    let options = LearnOptions {
+        okl: OklParams::for_calibration(&calibration),
+        ..LearnOptions::default()
+    };
+    let learned = learn_spec(
+        Method::Akl,
+        &demo,
+        task.as_ref().map(|t| &t.world),
+        &options,
+    );
+    let mut summary = summarize(&demo, &recording, stopped);
+    match &learned {
+        Ok(spec) => {
+            spec.save(&spec_path)
+                .map_err(|e| CliError::internal(format!("{}: {e}", spec_path.display())))?;
+            summary.spec = Some(spec_path.display().to_string());
+            summary.keyframes = Some(spec.keyframes.len());
+        }
+        Err(e) => summary.learn_error = Some(e.to_string()),
+    }
+    if args.json {
+        print_json(&summary)?;
+    } else {
+        print_summary(&summary);
+        if let Ok(spec) = &learned {
+            print!("{}", keyframe_table(spec).render());
+        }
+    }
+    match learned {
+        Ok(_) => Ok(()),
+        Err(e) => Err(CliError::input(format!(
+            "{}: recorded, but no spec could be learned: {e}",
+            recording.display()
+        ))),
+    }
+}
+
+type Taught = (Demo, PathBuf, bool, Option<Task>);
+
+fn teach_simulated(
+    args: &TeachArgs,
+    calibration: Calibration,
+    label: &str,
+    stop: &'static std::sync::atomic::AtomicBool,
+) -> Result<Taught, CliError> {
+    let name = args.task.as_deref().ok_or_else(|| {
+        CliError::input("--teacher sim needs --task (a built-in task or a task file)")
+    })?;
+    let task = builtin::resolve(name).map_err(CliError::input)?;
+    let profile = profile(&args.profile)?;
+    let sim = demonstrate(&task, &task.world, &profile, args.seed)
+        .map_err(|e| CliError::input(format!("task `{name}`: {e}")))?;
+    let mut answers = answer_source(
+        args.answers.as_deref().unwrap_or("oracle"),
+        Some((&sim, &profile, args.seed)),
+    )?;
+    let header = session_header(&sim.demo.header, Some(label));
+    let names: Vec<String> = sim.demo.objects.iter().map(|o| o.name.clone()).collect();
+    let mut recording =
+        Recording::create(&args.output, &header, &names).map_err(CliError::input)?;
+    let partial = recording.partial_path().to_path_buf();
+    let pace = Pace {
+        realtime: args.realtime,
+        stop: Some(stop),
+    };
+    let (demo, stopped) = stream_demo(
+        &sim.demo,
+        header,
+        &sim.marked_keyframes,
+        calibration,
+        answers.as_mut(),
+        Some(&mut recording),
+        &pace,
+    )
+    .map_err(|e| kept_partial(&partial, e))?;
+    let path = recording.finish().map_err(CliError::internal)?;
+    Ok((demo, path, stopped, Some(task)))
+}
+
+fn teach_live(
+    args: &TeachArgs,
+    calibration: Calibration,
+    label: &str,
+    stop: &'static std::sync::atomic::AtomicBool,
+) -> Result<Taught, CliError> {
+    let stdin = std::io::stdin();
+    let mut stream = LiveStream::new(stdin.lock());
+    let at_input = |e| CliError::input(format!("standard input: {e}"));
+    let start = stream.start().map_err(at_input)?;
+    let task = match &args.task {
+        Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
+        None => builtin::task(&start.header.task)
+            .transpose()
+            .map_err(CliError::internal)?,
+    };
+    let mut answers = answer_source(args.answers.as_deref().unwrap_or("terminal"), None)?;
+    let header = session_header(&start.header, Some(label));
+    let objects = start.objects.clone();
+    let mut recording =
+        Recording::create(&args.output, &header, &objects).map_err(CliError::input)?;
+    let partial = recording.partial_path().to_path_buf();
+    let mut session = TeachingSession::new(header, &objects, calibration, answers.as_mut())
+        .with_sink(&mut recording);
+    let end = stream
+        .run(start, &mut session, stop)
+        .map_err(|e| kept_partial(&partial, format!("standard input: {e}")))?;
+    let demo = session.finish().map_err(|e| kept_partial(&partial, e))?;
+    let path = recording.finish().map_err(CliError::internal)?;
+    Ok((demo, path, end == LiveEnd::Stopped, task))
+}
+
+/// A failed session whose recording so far stays in the `.partial` file.
+fn kept_partial(partial: &Path, e: impl std::fmt::Display) -> CliError {
+    CliError::input(format!(
+        "{e}; the recording so far is in {}",
+        partial.display()
+    ))
+}
+
+fn summarize(demo: &Demo, recording: &Path, stopped: bool) -> Summary {
+    let mut answers = AnswerCounts::default();
+    let (mut queries, mut suggestions, mut marks) = (0, 0, 0);
+    for e in &demo.events {
+        match e.kind {
+            DialogueKind::Query => queries += 1,
+            DialogueKind::Answer(Answer::Yes) => answers.yes += 1,
+            DialogueKind::Answer(Answer::No) => answers.no += 1,
+            DialogueKind::Answer(Answer::Unknown) => answers.unknown += 1,
+            DialogueKind::Suggestion => suggestions += 1,
+            DialogueKind::Keyframe => marks += 1,
+        }
+    }
+    Summary {
+        recording: recording.display().to_string(),
+        task: demo.header.task.clone(),
+        frames: demo.len(),
+        duration_s: demo.times.last().unwrap_or(&0.0) - demo.times.first().unwrap_or(&0.0),
+        queries,
+        answers,
+        suggestions,
+        keyframe_marks: marks,
+        stopped_early: stopped,
+        spec: None,
+        keyframes: None,
+        learn_error: None,
+    }
+}
+
+fn print_summary(s: &Summary) {
+    println!(
+        "recorded {}: task `{}`, {} frames, {:.1} s{}",
+        s.recording,
+        s.task,
+        s.frames,
+        s.duration_s,
+        if s.stopped_early {
+            " (stopped early by Ctrl-C)"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "  dialogue: {} queries (yes {}, no {}, I don't know {}), {} suggestions, {} keyframe marks",
+        s.queries, s.answers.yes, s.answers.no, s.answers.unknown, s.suggestions, s.keyframe_marks
+    );
+    match (&s.spec, &s.learn_error) {
+        (Some(spec), _) => println!(
+            "  learned with AKL: {} keyframes, written to {spec}",
+            s.keyframes.unwrap_or(0)
+        ),
+        (None, Some(e)) => println!("  no spec learned: {e}"),
+        (None, None) => {}
+    }
+}

@@ -1,0 +1,440 @@
+//! End-to-end tests of `akl calibrate`, `akl teach`, `akl learn` and `akl score` through the
+//! binary: files written, exit codes, live teaching from standard input with answers typed on a
+//! pseudo-terminal, and recordings that survive SIGKILL and end cleanly on Ctrl-C.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn akl_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the akl binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o.stdout)))
+}
+
+#[test]
+fn teach_learn_and_score_every_builtin_task() {
+    let dir = scratch("teach");
+    for task in ["pick_place", "inspection", "assembly"] {
+        let demo = format!("{task}.mcap");
+        let o = akl_in(&dir, &["teach", "--task", task, "--seed", "3", "-o", &demo]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert!(text(&o.stdout).contains("learned with AKL"));
+        assert!(dir.join(&demo).exists() && !dir.join(format!("{demo}.partial")).exists());
+        let spec = format!("{task}.spec.json");
+        let o = akl_in(&dir, &["score", &spec, "--truth", task, "--json"]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert_eq!(json(&o)["success"], true, "{task}: {}", text(&o.stdout));
+        for method in ["akl", "kd", "macl"] {
+            let out = format!("{task}.{method}.json");
+            let o = akl_in(
+                &dir,
+                &["learn", &demo, "--method", method, "-o", &out, "--json"],
+            );
+            assert!(o.status.success(), "{method}: {}", text(&o.stderr));
+            assert_eq!(json(&o)["spec"]["method"], method);
+            assert!(dir.join(&out).exists());
+        }
+    }
+}
+
+#[test]
+fn calibrate_a_simulated_teacher_and_teach_with_it() {
+    let dir = scratch("calibrate");
+    let o = akl_in(
+        &dir,
+        &[
+            "calibrate",
+            "--simulate",
+            "--seed",
+            "2",
+            "-o",
+            "cal.json",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let report = json(&o);
+    let s = &report["separation"];
+    assert_eq!(s["line_right"], s["line_points"]);
+    assert_eq!(s["circle_right"], s["circle_points"]);
+    let o = akl_in(
+        &dir,
+        &[
+            "teach",
+            "--task",
+            "inspection",
+            "--calibration",
+            "cal.json",
+            "-o",
+            "d.jsonl",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let header = std::fs::read_to_string(dir.join("d.jsonl")).unwrap();
+    assert!(header.lines().next().unwrap().contains("cal.json"));
+    // Line and circle files: a calibration from recordings, and degenerate input.
+    std::fs::write(dir.join("still.jsonl"), still_demo()).unwrap();
+    let o = akl_in(
+        &dir,
+        &[
+            "calibrate",
+            "--line",
+            "d.jsonl",
+            "--circle",
+            "still.jsonl",
+            "-o",
+            "c2.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stdout));
+    assert!(text(&o.stderr).contains("circle"), "{}", text(&o.stderr));
+    assert!(!dir.join("c2.json").exists());
+}
+
+fn still_demo() -> String {
+    let mut s = String::from("{\"akl_demo\": 1, \"task\": \"still\", \"frame\": \"world\"}\n");
+    for i in 0..100 {
+        s.push_str(&format!(
+            "{{\"t\": {}, \"ee\": {{\"p\": [0.4, 0, 0.3], \"q\": [1, 0, 0, 0]}}, \"gripper\": \"open\"}}\n",
+            i as f64 * 0.01
+        ));
+    }
+    s
+}
+
+#[test]
+fn bad_input_is_named_and_exits_2() {
+    let dir = scratch("bad");
+    std::fs::write(
+        dir.join("bad.jsonl"),
+        "{\"akl_demo\": 1, \"task\": \"t\", \"frame\": \"world\"}\n{\"t\": 0.0}\n",
+    )
+    .unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&["learn", "bad.jsonl"], "bad.jsonl: line 2"),
+        (&["learn", "missing.mcap"], "missing.mcap"),
+        (&["learn", "bad.jsonl", "--method", "okl"], "unknown method"),
+        (&["teach", "-o", "x.mcap"], "--task"),
+        (
+            &[
+                "teach",
+                "--task",
+                "inspection",
+                "--profile",
+                "sloppy",
+                "-o",
+                "x.mcap",
+            ],
+            "sloppy",
+        ),
+        (
+            &["teach", "--task", "inspection", "-o", "x.txt"],
+            ".mcap or .jsonl",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = akl_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
+        assert!(
+            text(&o.stderr).contains(needle),
+            "{args:?}: {}",
+            text(&o.stderr)
+        );
+    }
+    assert!(!dir.join("x.mcap").exists() && !dir.join("x.txt").exists());
+}
+
+/// A JSONL stream a robot driver would send: the frames and keyframe marks of a simulated
+/// teaching, without the learner's own detector states and dialogue.
+fn driver_stream(dir: &Path, task: &str) -> String {
+    let o = akl_in(
+        dir,
+        &[
+            "teach",
+            "--task",
+            task,
+            "--answers",
+            "all-yes",
+            "-o",
+            "src.jsonl",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    std::fs::read_to_string(dir.join("src.jsonl"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
+        .map(|l| {
+            format!(
+                "{}\n",
+                l.replace(",\"constrained\":true", "")
+                    .replace(",\"constrained\":false", "")
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_driver_streams_frames_on_stdin() {
+    let dir = scratch("stdin");
+    let stream = driver_stream(&dir, "inspection");
+    assert!(!stream.contains("constrained"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args([
+            "teach",
+            "--teacher",
+            "stdin",
+            "--answers",
+            "yes,yes,yes",
+            "-o",
+            "live.mcap",
+            "--json",
+        ])
+        .current_dir(&dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stream.as_bytes())
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let summary = json(&o);
+    assert_eq!(summary["task"], "inspection");
+    assert_eq!(summary["queries"], 1, "{summary}");
+    let o = akl_in(
+        &dir,
+        &["score", "live.spec.json", "--truth", "inspection", "--json"],
+    );
+    assert_eq!(json(&o)["success"], true);
+}
+
+#[test]
+fn a_stream_recorded_without_the_detector_is_replayed_by_learn() {
+    let dir = scratch("replay");
+    std::fs::write(dir.join("raw.jsonl"), driver_stream(&dir, "inspection")).unwrap();
+    let o = akl_in(&dir, &["learn", "raw.jsonl"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("--answers"), "{}", text(&o.stderr));
+    let o = akl_in(
+        &dir,
+        &[
+            "learn",
+            "raw.jsonl",
+            "--answers",
+            "yes",
+            "-o",
+            "s.json",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(json(&o)["replayed_detector"], true);
+    let o = akl_in(
+        &dir,
+        &["score", "s.json", "--truth", "inspection", "--json"],
+    );
+    assert_eq!(json(&o)["success"], true);
+}
+
+/// A pseudo-terminal pair: the child gets the slave as its controlling terminal, so its
+/// `/dev/tty` is the slave; the test reads and types on the master.
+struct Pty {
+    master: std::fs::File,
+    slave: std::os::fd::OwnedFd,
+}
+
+fn open_pty() -> Pty {
+    use std::os::fd::FromRawFd;
+    let (mut master, mut slave) = (0, 0);
+    // SAFETY: openpty writes two new file descriptors into the pointers given.
+    let rc = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0, "openpty failed");
+    // SAFETY: both descriptors were just opened and are owned by nobody else.
+    unsafe {
+        Pty {
+            master: std::fs::File::from_raw_fd(master),
+            slave: std::os::fd::OwnedFd::from_raw_fd(slave),
+        }
+    }
+}
+
+fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::process::CommandExt;
+    let slave = pty.slave.as_raw_fd();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
+    cmd.args(args)
+        .current_dir(dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::setsid() < 0 || libc::ioctl(slave, libc::TIOCSCTTY, 0) < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    cmd.spawn().unwrap()
+}
+
+#[test]
+fn questions_are_answered_on_the_terminal() {
+    let dir = scratch("tty");
+    let stream = driver_stream(&dir, "inspection");
+    let mut pty = open_pty();
+    let mut child = spawn_on_tty(
+        &dir,
+        &["teach", "--teacher", "stdin", "-o", "tty.jsonl", "--json"],
+        &pty,
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
+    // Read the question off the terminal, then type the answer.
+    let mut seen = String::new();
+    let mut buf = [0u8; 4096];
+    while !seen.contains("answer [y/n/?]") {
+        let n = pty.master.read(&mut buf).unwrap();
+        assert!(n > 0, "the terminal closed before a question: {seen}");
+        seen.push_str(&text(&buf[..n]));
+    }
+    assert!(
+        seen.contains("Do I have to move in a straight line there?"),
+        "{seen}"
+    );
+    assert!(
+        seen.contains("[y] yes") && seen.contains("nearest:"),
+        "{seen}"
+    );
+    pty.master.write_all(b"maybe\n").unwrap();
+    pty.master.write_all(b"y\n").unwrap();
+    feeder.join().unwrap().unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let summary = json(&o);
+    assert_eq!(summary["answers"]["yes"], 1, "{summary}");
+    let recorded = std::fs::read_to_string(dir.join("tty.jsonl")).unwrap();
+    assert!(recorded.contains("\"event\":\"answer\",\"value\":\"yes\""));
+}
+
+fn wait_for(path: &Path, bytes: u64) {
+    let start = Instant::now();
+    while std::fs::metadata(path).map_or(0, |m| m.len()) < bytes {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "{} never grew",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn a_killed_recording_keeps_all_but_its_last_second() {
+    let dir = scratch("kill");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args([
+            "teach",
+            "--task",
+            "inspection",
+            "--realtime",
+            "-o",
+            "k.mcap",
+        ])
+        .current_dir(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let partial = dir.join("k.mcap.partial");
+    let started = Instant::now();
+    // About six seconds of demonstration: past the grasp at 4.6 s.
+    wait_for(&partial, 1);
+    std::thread::sleep(Duration::from_secs(6));
+    let before_kill = started.elapsed().as_secs_f64();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!dir.join("k.mcap").exists());
+    let o = akl_in(
+        &dir,
+        &["learn", "k.mcap.partial", "--method", "kd", "--json"],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("truncated"), "{}", text(&o.stderr));
+    let frames = json(&o)["frames"].as_u64().unwrap() as f64;
+    // 100 Hz: everything but the last second (and the start-up before the first frame).
+    assert!(
+        frames / 100.0 >= before_kill - 2.5,
+        "{frames} frames after {before_kill} s"
+    );
+}
+
+#[test]
+fn ctrl_c_ends_a_recording_cleanly() {
+    let dir = scratch("sigint");
+    let child = Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args([
+            "teach",
+            "--task",
+            "inspection",
+            "--realtime",
+            "-o",
+            "c.mcap",
+            "--json",
+        ])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&dir.join("c.mcap.partial"), 1);
+    std::thread::sleep(Duration::from_secs(6));
+    // SAFETY: sending a signal to our own child process.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(json(&o)["stopped_early"], true);
+    assert!(dir.join("c.mcap").exists() && !dir.join("c.mcap.partial").exists());
+    let o = akl_in(&dir, &["learn", "c.mcap", "--method", "kd"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        !text(&o.stderr).contains("truncated"),
+        "{}",
+        text(&o.stderr)
+    );
+}
