@@ -78,10 +78,10 @@ impl Default for Calibration {
     fn default() -> Self {
         Calibration {
             akl_calibration: CALIBRATION_VERSION,
-            beta0: -11.5,
-            beta1: 2200.0,
-            tank_dissipation: 0.49,
-            tank_threshold: 0.98,
+            beta0: -12.4,
+            beta1: 2400.0,
+            tank_dissipation: 0.48,
+            tank_threshold: 0.97,
             filter_distance: FILTER_DISTANCE,
         }
     }

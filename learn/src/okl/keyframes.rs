@@ -60,6 +60,9 @@ pub fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
 
 /// Line 16, `CombineKF`: merges interaction and constraint keyframes into one ordered list.
 ///
+/// `interactions` and `lines` are in frame order; the merge bisects instead of scanning, so
+/// it costs O(K log K) for K keyframes, not O(K²).
+///
 /// A line boundary coincides with an interaction when it lies in the segment that interaction
 /// opens (line start) or closes (line end) and the end-effector positions at the two frames
 /// are at most `tolerance` metres apart; the boundary then moves to the interaction's frame and
@@ -72,7 +75,7 @@ pub fn combine(
     positions: &[Vector3<f64>],
     tolerance: f64,
 ) -> Vec<RawKeyframe> {
-    let is_interaction = |k: usize| interactions.iter().any(|i| i.frame == k);
+    let is_interaction = |k: usize| interactions.binary_search_by_key(&k, |i| i.frame).is_ok();
     let near = |a: usize, b: usize| (positions[a] - positions[b]).norm() <= tolerance;
     let mut snapped: Vec<LineConstraint> = Vec::with_capacity(lines.len());
     for line in lines {
@@ -93,9 +96,14 @@ pub fn combine(
         }
     }
     let mut out: Vec<RawKeyframe> = interactions.to_vec();
+    let mut boundaries: Vec<RawKeyframe> = Vec::with_capacity(2 * snapped.len());
     for l in &snapped {
         for c in constraint_keyframes(l) {
-            match out.iter_mut().find(|k| k.frame == c.frame) {
+            let existing = match out.binary_search_by_key(&c.frame, |k| k.frame) {
+                Ok(i) => Some(&mut out[i]),
+                Err(_) => boundaries.last_mut().filter(|b| b.frame == c.frame),
+            };
+            match existing {
                 Some(existing) => {
                     if existing.kind == KeyframeKind::Interaction {
                         existing.kind = KeyframeKind::Combined;
@@ -104,10 +112,11 @@ pub fn combine(
                         existing.constraint = Constraint::MoveInLine;
                     }
                 }
-                None => out.push(c),
+                None => boundaries.push(c),
             }
         }
     }
+    out.extend(boundaries);
     out.sort_by_key(|k| k.frame);
     out
 }

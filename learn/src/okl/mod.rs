@@ -269,11 +269,8 @@ fn key_objects(raw: &[RawKeyframe], demo: &Demo, objects: &[SceneObject]) -> Vec
         }
         keys[i] = match kf.gripper {
             Gripper::Closed => {
-                let hold_end = interaction_frames
-                    .iter()
-                    .copied()
-                    .find(|&f| f > kf.frame)
-                    .unwrap_or(last);
+                let next = interaction_frames.partition_point(|&f| f <= kf.frame);
+                let hold_end = interaction_frames.get(next).copied().unwrap_or(last);
                 held = grasped_object(objects, &demo.ee, kf.frame, hold_end);
                 held
             }

@@ -16,6 +16,8 @@
 //!   horizontal plane among those whose centre lies below the held object's centre.
 
 use crate::demo::Demo;
+use std::borrow::Cow;
+
 use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
@@ -30,18 +32,19 @@ pub const SUPPORT_GAP: f64 = 0.02;
 
 /// One object learning can ground on: its poses over the demo and, when known, its shape.
 #[derive(Debug, Clone)]
-pub struct SceneObject {
+pub struct SceneObject<'a> {
     /// Object name.
     pub name: String,
-    /// Pose at every frame, or one pose when the object never moves (not tracked in the demo).
-    pub poses: Vec<Pose>,
+    /// Pose at every frame (borrowed from the demo), or one pose when the object never moves
+    /// (not tracked in the demo).
+    pub poses: Cow<'a, [Pose]>,
     /// Shape, from the task's world.
     pub shape: Option<Shape>,
     /// Whether the object can be picked up, from the task's world.
     pub movable: Option<bool>,
 }
 
-impl SceneObject {
+impl SceneObject<'_> {
     /// Pose at frame `k` (the single pose of an untracked object).
     pub fn pose(&self, k: usize) -> &Pose {
         &self.poses[k.min(self.poses.len() - 1)]
@@ -54,7 +57,7 @@ impl SceneObject {
 
 /// The objects of a demo: its tracks, plus the objects of `world` the demo does not track
 /// (furniture a driver may not record), fixed at their pose in the world.
-pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
+pub fn scene_objects<'a>(demo: &'a Demo, world: Option<&World>) -> Vec<SceneObject<'a>> {
     let mut out: Vec<SceneObject> = demo
         .objects
         .iter()
@@ -63,7 +66,7 @@ pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
             let known = world.and_then(|w| w.object(&t.name));
             SceneObject {
                 name: t.name.clone(),
-                poses: t.poses.clone(),
+                poses: Cow::Borrowed(&t.poses),
                 shape: known.map(|o| o.shape),
                 movable: known.map(|o| o.movable),
             }
@@ -74,7 +77,7 @@ pub fn scene_objects(demo: &Demo, world: Option<&World>) -> Vec<SceneObject> {
             if !out.iter().any(|s| s.name == o.name) {
                 out.push(SceneObject {
                     name: o.name.clone(),
-                    poses: vec![o.pose],
+                    poses: Cow::Owned(vec![o.pose]),
                     shape: Some(o.shape),
                     movable: Some(o.movable),
                 });
@@ -157,10 +160,10 @@ mod tests {
     use super::*;
     use akl_tsr::pose::pose_from_xyz;
 
-    fn fixed(name: &str, p: [f64; 3], shape: Option<Shape>) -> SceneObject {
+    fn fixed(name: &str, p: [f64; 3], shape: Option<Shape>) -> SceneObject<'static> {
         SceneObject {
             name: name.into(),
-            poses: vec![pose_from_xyz(p)],
+            poses: Cow::Owned(vec![pose_from_xyz(p)]),
             shape,
             movable: Some(false),
         }
@@ -177,7 +180,8 @@ mod tests {
             poses: ee
                 .iter()
                 .map(|p| p * pose_from_xyz([0.0, 0.0, -0.02]))
-                .collect(),
+                .collect::<Vec<_>>()
+                .into(),
             shape: None,
             movable: None,
         };
@@ -192,7 +196,7 @@ mod tests {
         let box_shape = |x: f64, y: f64, z: f64| Some(Shape::Box { size: [x, y, z] });
         let held = SceneObject {
             name: "block".into(),
-            poses: vec![pose_from_xyz([0.5, -0.3, 0.18])],
+            poses: Cow::Owned(vec![pose_from_xyz([0.5, -0.3, 0.18])]),
             shape: box_shape(0.05, 0.05, 0.08),
             movable: Some(true),
         };
@@ -200,7 +204,7 @@ mod tests {
         let shelf = fixed("shelf", [0.48, -0.3, 0.07], box_shape(0.22, 0.26, 0.14));
         let objs = vec![table.clone(), held.clone(), shelf.clone()];
         assert_eq!(support_object(&objs, 1, 0), Some(2));
-        let strip = |mut o: SceneObject| {
+        let strip = |mut o: SceneObject<'static>| {
             o.shape = None;
             o
         };

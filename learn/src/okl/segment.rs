@@ -75,45 +75,56 @@ pub fn runs(states: &[bool]) -> Vec<RangeInclusive<usize>> {
 }
 
 /// The answer given to the query a detected run raised: the first answer at or after the run's
-/// first frame and before the next run starts (`None` when the teacher gave none).
+/// first frame and before the next run starts (`None` when the teacher gave none). `events`
+/// are in time order.
 pub fn answer_for(
     run: &RangeInclusive<usize>,
     next_run_start: Option<usize>,
     events: &[DialogueEvent],
 ) -> Option<Answer> {
-    events.iter().find_map(|e| match e.kind {
-        DialogueKind::Answer(a)
-            if e.frame >= *run.start() && next_run_start.is_none_or(|n| e.frame < n) =>
-        {
-            Some(a)
-        }
-        _ => None,
-    })
+    events
+        .iter()
+        .skip_while(|e| e.frame < *run.start())
+        .take_while(|e| next_run_start.is_none_or(|n| e.frame < n))
+        .find_map(|e| match e.kind {
+            DialogueKind::Answer(a) => Some(a),
+            _ => None,
+        })
 }
 
 /// Line 3, `ModifyDetectedConstraints`: the detected constrained runs of `detector` without
 /// those the teacher answered "no" (answers "yes", "I don't know" and no answer keep a run).
+///
+/// One pass over the runs and the (time-ordered) events together.
 pub fn modify_detected_constraints(
     detector: &[bool],
     events: &[DialogueEvent],
 ) -> Vec<RangeInclusive<usize>> {
     let all = runs(detector);
-    all.iter()
-        .enumerate()
-        .filter(|(i, run)| {
-            let next = all.get(i + 1).map(|r| *r.start());
-            answer_for(run, next, events) != Some(Answer::No)
-        })
-        .map(|(_, r)| r.clone())
-        .collect()
+    let mut kept = Vec::with_capacity(all.len());
+    let mut from = 0;
+    for (i, run) in all.iter().enumerate() {
+        from += events[from..].partition_point(|e| e.frame < *run.start());
+        let next = all.get(i + 1).map(|r| *r.start());
+        if answer_for(run, next, &events[from..]) != Some(Answer::No) {
+            kept.push(run.clone());
+        }
+    }
+    kept
 }
 
 /// Line 5, `getConstrainedRegions`: the parts of the kept runs inside `segment`, in order.
+///
+/// `kept` is in frame order (as [`modify_detected_constraints`] returns it), so the runs that
+/// can reach into the segment are found by bisection.
 pub fn constrained_regions(
     segment: &Segment,
     kept: &[RangeInclusive<usize>],
 ) -> Vec<RangeInclusive<usize>> {
-    kept.iter()
+    let first = kept.partition_point(|r| *r.end() < segment.start);
+    kept[first..]
+        .iter()
+        .take_while(|r| *r.start() <= segment.end)
         .filter_map(|r| {
             let a = (*r.start()).max(segment.start);
             let b = (*r.end()).min(segment.end);
