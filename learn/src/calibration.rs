@@ -28,9 +28,9 @@ pub const SWITCH_POINTS: f64 = 2.0;
 /// whole reach. Measured with `cargo test --release -p akl-learn --test detection
 /// detector_survey -- --ignored --nocapture` (60 demos: the default teacher, and the same
 /// teacher moving straight wherever it is free to): with the 0.3 m calibration circle, queries
-/// on curved motion were 13 at 0.1, 0 at 0.5 and 0 at 0.7, while every required line and 119 of
-/// 130 unintended lines were asked about in each case; with a 0.12 m circle there were 138 to
-/// 303 whatever the fraction. 0.5 is the fraction with a symmetric meaning.
+/// on curved motion were 12 at 0.1, 0 at 0.5 and 0 at 0.7, while every required line and 119 of
+/// 130 unintended lines were asked about in each case; with a 0.12 m circle there were 124 to
+/// 300 whatever the fraction. 0.5 is the fraction with a symmetric meaning.
 pub const DISSIPATION_FRACTION: f64 = 0.5;
 
 /// How the energy tank's T_d and T_s follow from the fitted model (the thesis infers them from

@@ -117,7 +117,7 @@ pub struct Recording {
 
 impl Recording {
     /// Starts recording `header` and the named objects into `path` (`.mcap` or `.jsonl`),
-    /// writing to `<path>.partial` until [`Recording::finish`].
+    /// writing to `<path>.partial` until [`Recording::finish`]; missing folders are created.
     pub fn create(
         path: &Path,
         header: &DemoHeader,
@@ -130,6 +130,9 @@ impl Recording {
             path: partial.clone(),
             source,
         };
+        if let Some(dir) = partial.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(io)?;
+        }
         let file = BufWriter::new(File::create(&partial).map_err(io)?);
         let writer = match format {
             DemoFormat::Mcap => Writer::Mcap(Box::new(
