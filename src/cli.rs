@@ -115,6 +115,9 @@ pub struct TeachArgs {
     /// Play the simulated teacher in real time instead of as fast as possible.
     #[arg(long)]
     pub realtime: bool,
+    /// Recording rate of the simulated teacher in Hz (default: its profile's, 100; at most 1000).
+    #[arg(long)]
+    pub rate: Option<f64>,
     /// Where to record the demonstration: a .mcap or .jsonl file.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -145,6 +148,9 @@ pub struct LearnArgs {
     /// Answers for replaying the detector over a demo recorded without it.
     #[arg(long)]
     pub answers: Option<String>,
+    /// Half-widths of every learned TSR: metres on x, y, z and radians on roll, pitch, yaw.
+    #[arg(long, value_name = "METRES,RADIANS", default_value = "0.005,0.05")]
+    pub bounds: String,
     /// Where to write the spec (JSON).
     #[arg(short, long)]
     pub output: Option<PathBuf>,

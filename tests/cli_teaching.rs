@@ -129,7 +129,7 @@ fn bad_input_is_named_and_exits_2() {
         "{\"akl_demo\": 1, \"task\": \"t\", \"frame\": \"world\"}\n{\"t\": 0.0}\n",
     )
     .unwrap();
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["learn", "bad.jsonl"], "bad.jsonl: line 2"),
         (&["learn", "missing.mcap"], "missing.mcap"),
         (&["learn", "bad.jsonl", "--method", "okl"], "unknown method"),

@@ -9,7 +9,7 @@ use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::{learn_spec, prepare, LearnOptions, Method};
 use akl_scene::builtin;
-use akl_tsr::TaskSpec;
+use akl_tsr::{Bounds, TaskSpec};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -50,10 +50,14 @@ pub fn run(args: LearnArgs) -> CliResult {
         demo = prepare(method, demo, calibration, answers.as_mut())
             .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
     }
-    let options = LearnOptions {
+    let bounds = parse_bounds(&args.bounds)?;
+    let mut options = LearnOptions {
         okl: OklParams::for_calibration(&calibration),
         ..LearnOptions::default()
     };
+    options.okl.bounds = bounds;
+    options.kd.bounds = bounds;
+    options.macl.bounds = bounds;
     let started = Instant::now();
     let spec = learn_spec(method, &demo, task.as_ref().map(|t| &t.world), &options)
         .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
@@ -91,4 +95,23 @@ pub fn run(args: LearnArgs) -> CliResult {
         println!("wrote {out}");
     }
     Ok(())
+}
+
+/// `METRES,RADIANS` as symmetric TSR bounds.
+fn parse_bounds(text: &str) -> Result<Bounds, CliError> {
+    let bad = || {
+        CliError::input(format!(
+            "--bounds `{text}`: expected two non-negative numbers METRES,RADIANS such as 0.005,0.05"
+        ))
+    };
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    match values[..] {
+        [p, r] if p.is_finite() && r.is_finite() && p >= 0.0 && r >= 0.0 => {
+            Ok(Bounds::symmetric(p, r))
+        }
+        _ => Err(bad()),
+    }
 }

@@ -98,7 +98,10 @@ fn teach_simulated(
         CliError::input("--teacher sim needs --task (a built-in task or a task file)")
     })?;
     let task = builtin::resolve(name).map_err(CliError::input)?;
-    let profile = profile(&args.profile)?;
+    let mut profile = profile(&args.profile)?;
+    if let Some(rate) = args.rate {
+        profile.rate = rate;
+    }
     let sim = demonstrate(&task, &task.world, &profile, args.seed)
         .map_err(|e| CliError::input(format!("task `{name}`: {e}")))?;
     let mut answers = answer_source(
