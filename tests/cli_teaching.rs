@@ -150,6 +150,19 @@ fn bad_input_is_named_and_exits_2() {
             &["teach", "--task", "inspection", "-o", "x.txt"],
             ".mcap or .jsonl",
         ),
+        (
+            &[
+                "teach",
+                "--task",
+                "inspection",
+                "--rate",
+                "5000",
+                "-o",
+                "x.mcap",
+            ],
+            "5000 Hz",
+        ),
+        (&["learn", "bad.jsonl", "--bounds", "0.01"], "--bounds"),
     ];
     for (args, needle) in cases {
         let o = akl_in(&dir, args);
