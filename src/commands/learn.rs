@@ -26,6 +26,7 @@ struct Learned<'a> {
 
 pub fn run(args: LearnArgs) -> CliResult {
     let method: Method = args.method.parse().map_err(CliError::input)?;
+    let bounds = parse_bounds(&args.bounds)?;
     let loaded = read_demo_file(&args.demo).map_err(CliError::input)?;
     if let Some(t) = &loaded.truncation {
         eprintln!("warning: {}: {t}", args.demo.display());
@@ -50,7 +51,6 @@ pub fn run(args: LearnArgs) -> CliResult {
         demo = prepare(method, demo, calibration, answers.as_mut())
             .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
     }
-    let bounds = parse_bounds(&args.bounds)?;
     let mut options = LearnOptions {
         okl: OklParams::for_calibration(&calibration),
         ..LearnOptions::default()
