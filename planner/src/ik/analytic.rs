@@ -20,7 +20,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 pub const DOF: usize = 7;
 
 /// Grid step of the q7 search (radians).
-pub const Q7_STEP: f64 = 0.1;
+pub const Q7_STEP: f64 = 0.2;
 
 /// Grid step of the second, finer q7 sweep run when the coarse one finds nothing (radians).
 pub const Q7_FINE_STEP: f64 = 0.01;
@@ -178,7 +178,6 @@ impl PandaIk {
         let x6 = r7 * Vector3::new(c7, -s7, 0.0);
         let y6 = -r7.column(2).into_owned();
         let z6 = r7 * Vector3::new(s7, c7, 0.0);
-        let r6 = Matrix3::from_columns(&[x6, y6, z6]);
         let o6 = o7 - self.a7 * x6;
         let o2 = Vector3::new(0.0, 0.0, self.d1);
         let v = o6 - o2;
@@ -247,18 +246,17 @@ impl PandaIk {
                 let y4 = (ux * w - wx * u) / det;
                 let y4 = (y4 - x4 * x4.dot(&y4)).normalize();
                 let z4 = x4.cross(&y4);
-                let r4 = Matrix3::from_columns(&[x4, y4, z4]);
-                let m = r4.transpose() * r6;
+                // R4ᵀ·R6 = Ry(q5)·Rz(q6): q5 from its third column, q6 from its second row.
                 let (Some(q5), Some(q6)) = (
-                    fit(m[(0, 2)].atan2(m[(2, 2)]), self.limits[4]),
-                    fit(m[(1, 0)].atan2(m[(1, 1)]), self.limits[5]),
+                    fit(x4.dot(&z6).atan2(z4.dot(&z6)), self.limits[4]),
+                    fit(y4.dot(&x6).atan2(y4.dot(&y6)), self.limits[5]),
                 ) else {
                     continue;
                 };
-                // R3 = R4 · Rz(-q4) · Rx(-π/2)
-                let r3 = r4
-                    * Rotation3::from_axis_angle(&Vector3::z_axis(), -q4).into_inner()
-                    * Rotation3::from_axis_angle(&Vector3::x_axis(), -FRAC_PI_2).into_inner();
+                // R3 = R4·Rz(-q4)·Rx(-π/2): columns c·x4 - s·y4, -z4, s·x4 + c·y4.
+                let x3 = c4 * x4 - s4 * y4;
+                let z3 = s4 * x4 + c4 * y4;
+                let r3 = Matrix3::from_columns(&[x3, -z4, z3]);
                 self.shoulder(&r3, q1_hint, |q1, q2, q3| {
                     emit([q1, q2, q3, q4, q5, q6, q7])
                 });
@@ -403,14 +401,18 @@ impl PandaIk {
         let f7 = self.frame7_for(tcp);
         let [lo, hi] = self.q7_range();
         let mut all: Vec<([f64; DOF], f64)> = Vec::new();
-        let step = 1.5 * Q7_STEP;
         let s7 = seed[6].clamp(lo, hi);
-        let mut k = 0.0;
-        while s7 + k * step <= hi || s7 - k * step >= lo {
-            for q7 in [s7 + k * step, s7 - k * step] {
-                self.solve_q7(&f7, q7, seed[0], |c| all.push((c, distance(&c, seed))));
+        for step in [1.5 * Q7_STEP, Q7_FINE_STEP] {
+            let mut k = 0.0;
+            while s7 + k * step <= hi || s7 - k * step >= lo {
+                for q7 in [s7 + k * step, s7 - k * step] {
+                    self.solve_q7(&f7, q7, seed[0], |c| all.push((c, distance(&c, seed))));
+                }
+                k += 1.0;
             }
-            k += 1.0;
+            if !all.is_empty() {
+                break;
+            }
         }
         all.sort_by(|a, b| a.1.total_cmp(&b.1));
         let mut kept: Vec<[f64; DOF]> = Vec::new();
@@ -454,5 +456,86 @@ impl PandaIk {
         }
         let (q, _) = best?;
         Self::verified(kin, &q, tcp).then_some(q)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Robot;
+    use proptest::prelude::*;
+
+    fn arb_q() -> impl Strategy<Value = Vec<f64>> {
+        let robot = Robot::panda().unwrap();
+        robot
+            .joint_limits()
+            .iter()
+            .map(|[lo, hi]| *lo..*hi)
+            .collect::<Vec<_>>()
+    }
+
+    fn close(robot: &Robot, q: &[f64], target: &Pose) -> bool {
+        let got = robot.tcp_pose(q);
+        (got.translation.vector - target.translation.vector).norm() < 1e-6
+            && got.rotation.angle_to(&target.rotation) < 1e-6
+    }
+
+    fn within_limits(robot: &Robot, q: &[f64]) -> bool {
+        robot.check_joints(q).is_ok()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        #[test]
+        fn ik_of_fk_reproduces_the_pose(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sol = robot.ik(&target, robot.ready()).unwrap();
+            prop_assert!(close(&robot, &sol, &target));
+            prop_assert!(within_limits(&robot, &sol));
+        }
+
+        #[test]
+        fn seeded_with_the_answer_ik_returns_it(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sol = robot.ik(&target, &q).unwrap();
+            prop_assert!(max_step(&sol, &q) < 1e-6, "{sol:?} vs {q:?}");
+        }
+
+        #[test]
+        fn every_listed_solution_reaches_the_pose(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sols = robot.ik_solutions(&target, robot.ready(), 8);
+            prop_assert!(!sols.is_empty());
+            for s in &sols {
+                prop_assert!(close(&robot, s, &target) && within_limits(&robot, s));
+            }
+        }
+
+        #[test]
+        fn small_moves_have_continuous_solutions(q in arb_q(), dx in -0.002..0.002f64, dz in -0.002..0.002f64) {
+            let robot = Robot::panda().unwrap();
+            let mut target = robot.tcp_pose(&q);
+            target.translation.vector.x += dx;
+            target.translation.vector.z += dz;
+            if let Some(s) = robot.ik_continuous(&target, &q, 0.1) {
+                prop_assert!(close(&robot, &s, &target));
+                prop_assert!(max_step(&s, &q) <= 0.1);
+            }
+        }
+    }
+
+    #[test]
+    fn a_pose_out_of_reach_is_unreachable() {
+        let robot = Robot::panda().unwrap();
+        let far = akl_tsr::pose::pose_from_xyz([1.5, 0.0, 0.5]);
+        assert_eq!(
+            robot.ik(&far, robot.ready()),
+            Err(crate::error::IkError::Unreachable)
+        );
+        assert!(robot.ik_solutions(&far, robot.ready(), 4).is_empty());
     }
 }

@@ -138,3 +138,52 @@ impl DlsIk {
             .filter(|q| super::analytic::max_step(q, previous) <= max_joint_step)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::robot::{Robot, PANDA_TOML, PANDA_URDF};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::path::Path;
+
+    fn dls_panda() -> Robot {
+        Robot::from_texts(
+            &PANDA_TOML.replace("solver = \"panda\"", "solver = \"dls\""),
+            Path::new("robot.toml"),
+            PANDA_URDF,
+            Path::new("panda.urdf"),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn dls_solves_random_reachable_poses() {
+        let robot = dls_panda();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut solved = 0;
+        let n = 60;
+        for _ in 0..n {
+            let q: Vec<f64> = robot
+                .joint_limits()
+                .iter()
+                .map(|[lo, hi]| rng.gen_range(*lo..*hi))
+                .collect();
+            let target = robot.tcp_pose(&q);
+            if let Ok(sol) = robot.ik(&target, robot.ready()) {
+                let got = robot.tcp_pose(&sol);
+                assert!((got.translation.vector - target.translation.vector).norm() < 1e-5);
+                assert!(got.rotation.angle_to(&target.rotation) < 1e-5);
+                assert!(robot.check_joints(&sol).is_ok());
+                solved += 1;
+            }
+        }
+        assert!(solved >= n * 9 / 10, "solved {solved} of {n}");
+    }
+
+    #[test]
+    fn dls_reports_an_unreachable_pose() {
+        let robot = dls_panda();
+        let far = akl_tsr::pose::pose_from_xyz([1.5, 0.0, 0.5]);
+        assert!(robot.ik(&far, robot.ready()).is_err());
+    }
+}
