@@ -6,11 +6,13 @@
 //! Collision checking uses parry3d shapes built from the URDF collision elements and the
 //! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]).
 
+pub mod collision;
 pub mod config;
 pub mod error;
 pub mod fk;
 pub mod geometry;
 pub mod ik;
+pub mod parry_convert;
 pub mod robot;
 pub mod urdf_load;
 

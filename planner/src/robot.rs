@@ -1,6 +1,7 @@
 //! A robot: its URDF model (urdf-rs + k), compiled kinematics, limits, gripper, collision
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
+use crate::collision::{MAX_BODIES, MAX_LINKS};
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::error::{IkError, RobotError};
 use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
@@ -102,6 +103,13 @@ impl Robot {
         let (kin, arm) =
             Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &mimics)
                 .map_err(urdf_err)?;
+        let shapes: usize = kin.links().iter().map(|l| l.shapes.len()).sum();
+        if kin.links().len() > MAX_LINKS || shapes > MAX_BODIES {
+            return Err(urdf_err(format!(
+                "{} links with {shapes} collision elements: the planner handles at most {MAX_LINKS} links and {MAX_BODIES} elements",
+                kin.links().len()
+            )));
+        }
         let dof = kin.dof();
         for (name, values) in [
             ("ready", &config.ready),
