@@ -140,13 +140,22 @@ impl fmt::Display for Hit {
     }
 }
 
-/// Exclusions that hold for part of a plan (see the module documentation of `plan`).
-#[derive(Debug, Clone, Default)]
+/// Contacts allowed during part of a plan (see the module documentation of `task`).
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Allowances {
     /// World objects the hand links may touch (the object being grasped or just released).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hand_may_touch: Vec<String>,
     /// World objects the held object may touch (the support it leaves or is placed on).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub held_may_touch: Vec<String>,
+}
+
+impl Allowances {
+    /// Whether nothing is allowed.
+    pub fn is_empty(&self) -> bool {
+        self.hand_may_touch.is_empty() && self.held_may_touch.is_empty()
+    }
 }
 
 impl RobotCollision {

@@ -6,17 +6,28 @@
 //! Collision checking uses parry3d shapes built from the URDF collision elements and the
 //! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]).
 
+pub mod check;
 pub mod collision;
 pub mod config;
 pub mod error;
 pub mod fk;
 pub mod geometry;
+pub mod goal;
 pub mod ik;
+pub mod line;
 pub mod parry_convert;
+pub mod plan;
 pub mod robot;
+pub mod rrt;
+pub mod shortcut;
+pub mod space;
+pub mod task;
+pub mod timing;
 pub mod urdf_load;
 
 pub use config::RobotConfig;
 pub use error::{IkError, PlanError, RobotError};
 pub use geometry::{Geometry, LinkShape};
+pub use plan::{GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind};
 pub use robot::Robot;
+pub use task::{plan_task, PlanOptions};

@@ -388,8 +388,9 @@ impl PandaIk {
         Self::verified(kin, &q, tcp).then_some(q)
     }
 
-    /// Distinct solutions from a sweep over the whole q7 range, nearest `seed` first; two
-    /// solutions are distinct when some joint differs by more than `spacing` radians.
+    /// The nearest solution (see [`PandaIk::nearest`]), then distinct solutions from a sweep
+    /// over the whole q7 range, nearest `seed` first; two solutions are distinct when some
+    /// joint differs by more than `spacing` radians.
     pub fn solutions(
         &self,
         kin: &Kinematics,
@@ -415,6 +416,11 @@ impl PandaIk {
             }
         }
         all.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // The grid can step over narrow q7 windows where the solutions nearest the seed lie;
+        // the refined nearest solution goes first.
+        if let Some(q) = self.nearest(kin, tcp, seed) {
+            all.insert(0, (q, 0.0));
+        }
         let mut kept: Vec<[f64; DOF]> = Vec::new();
         for (c, _) in all {
             if kept.len() >= max {

@@ -37,7 +37,8 @@ impl IkSolver {
         .ok_or(IkError::Unreachable)
     }
 
-    /// Up to `max` distinct solutions, nearest `seed` first (empty if unreachable).
+    /// Up to `max` distinct solutions, nearest `seed` first (empty if unreachable). For the
+    /// Panda: the analytic ones and the one damped least squares reaches from the seed.
     pub fn solutions(
         &self,
         kin: &Kinematics,
@@ -47,11 +48,26 @@ impl IkSolver {
         spacing: f64,
     ) -> Vec<Vec<f64>> {
         match self {
-            IkSolver::Panda { analytic, .. } => analytic
-                .solutions(kin, tcp, seed, max, spacing)
-                .into_iter()
-                .map(|q| q.to_vec())
-                .collect(),
+            IkSolver::Panda { analytic, dls } => {
+                let mut all: Vec<Vec<f64>> = analytic
+                    .solutions(kin, tcp, seed, max, spacing)
+                    .into_iter()
+                    .map(|q| q.to_vec())
+                    .collect();
+                // Descent from the seed finds the solution nearest it even where the q7 grid
+                // steps over it (near q2 = 0 the split between q1 and q3 turns quickly).
+                if let Some(q) = dls.descend(kin, tcp, seed) {
+                    if all.iter().all(|s| analytic::max_step(s, &q) > spacing) {
+                        all.push(q);
+                    }
+                }
+                let distance = |q: &Vec<f64>| -> f64 {
+                    q.iter().zip(seed).map(|(a, b)| (a - b) * (a - b)).sum()
+                };
+                all.sort_by(|a, b| distance(a).total_cmp(&distance(b)));
+                all.truncate(max);
+                all
+            }
             IkSolver::Dls(dls) => dls.solutions(kin, tcp, seed, max, spacing),
         }
     }
