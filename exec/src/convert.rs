@@ -1,0 +1,131 @@
+//! The one place where AKL's nalgebra `f64` poses and shapes become rapier3d's glam `f32`
+//! types, and back.
+
+use akl_planner::Geometry;
+use akl_scene::Shape;
+use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
+use akl_tsr::Pose;
+use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, Rotation, Vector};
+use std::f64::consts::FRAC_PI_2;
+
+/// A pose as rapier's single-precision pose.
+pub fn to_sim(p: &Pose) -> SimPose {
+    let t = p.translation.vector;
+    let q = p.rotation.quaternion().coords;
+    SimPose::from_parts(
+        Vector::new(t.x as f32, t.y as f32, t.z as f32),
+        Rotation::from_xyzw(q.x as f32, q.y as f32, q.z as f32, q.w as f32).normalize(),
+    )
+}
+
+/// A rapier pose as an AKL pose.
+pub fn from_sim(p: &SimPose) -> Pose {
+    let t = p.translation;
+    let q = p.rotation;
+    Pose::from_parts(
+        Translation3::new(f64::from(t.x), f64::from(t.y), f64::from(t.z)),
+        UnitQuaternion::from_quaternion(Quaternion::new(
+            f64::from(q.w),
+            f64::from(q.x),
+            f64::from(q.y),
+            f64::from(q.z),
+        )),
+    )
+}
+
+/// A rapier vector as an nalgebra vector.
+pub fn vector_from_sim(v: Vector) -> Vector3<f64> {
+    Vector3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
+}
+
+/// URDF and AKL cylinders run along z, rapier's along y: the turn that maps y onto z, placed
+/// between the shape's frame and the rapier cylinder.
+fn cylinder_axis() -> Pose {
+    Pose::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2),
+    )
+}
+
+/// A collider for a scene object, placed at `origin` (the object frame in its body's frame).
+pub fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
+    match *shape {
+        Shape::Box { size } => ColliderBuilder::cuboid(
+            0.5 * size[0] as f32,
+            0.5 * size[1] as f32,
+            0.5 * size[2] as f32,
+        )
+        .position(to_sim(origin)),
+        Shape::Cylinder { radius, length } => prism(radius, length).position(to_sim(origin)),
+        Shape::Sphere { radius } => ColliderBuilder::ball(radius as f32).position(to_sim(origin)),
+    }
+}
+
+/// Sides of the prism that stands in for a movable cylinder.
+pub const PRISM_SIDES: usize = 24;
+
+/// A cylinder of the scene as a [`PRISM_SIDES`]-sided prism along z whose faces touch the true
+/// cylinder (so it rests at the same height), with faces normal to ±x and ±y.
+///
+/// rapier's exact cylinder lying on a box touches it along a line with no rolling resistance,
+/// and numerical error sets it rolling (a pipe resting on a rail rolls off within two seconds);
+/// a prism rests on a face, as a real pipe held by friction and its own imperfections does.
+fn prism(radius: f64, length: f64) -> ColliderBuilder {
+    let n = PRISM_SIDES;
+    let corner = radius / (std::f64::consts::PI / n as f64).cos();
+    let h = 0.5 * length;
+    let points: Vec<Vector> = (0..n)
+        .flat_map(|k| {
+            let a = (2 * k + 1) as f64 * std::f64::consts::PI / n as f64;
+            let (x, y) = ((corner * a.cos()) as f32, (corner * a.sin()) as f32);
+            [Vector::new(x, y, -h as f32), Vector::new(x, y, h as f32)]
+        })
+        .collect();
+    ColliderBuilder::convex_hull(&points).unwrap_or_else(|| {
+        ColliderBuilder::cylinder(h as f32, radius as f32).position(to_sim(&cylinder_axis()))
+    })
+}
+
+/// A collider for one collision element of a robot link, placed at `origin` in the link frame.
+pub fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuilder {
+    match *geometry {
+        Geometry::Capsule { radius, length } => {
+            ColliderBuilder::capsule_z(0.5 * length as f32, radius as f32).position(to_sim(origin))
+        }
+        Geometry::Box { size } => object_collider(&Shape::Box { size }, origin),
+        Geometry::Cylinder { radius, length } => {
+            ColliderBuilder::cylinder(0.5 * length as f32, radius as f32)
+                .position(to_sim(&(origin * cylinder_axis())))
+        }
+        Geometry::Sphere { radius } => object_collider(&Shape::Sphere { radius }, origin),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_tsr::pose::{pose_from_xyz_rpy, position_distance, rotation_distance};
+
+    #[test]
+    fn poses_survive_the_round_trip_to_single_precision() {
+        let p = pose_from_xyz_rpy([0.45, -0.32, 0.19], [0.3, -1.2, 2.9]);
+        let back = from_sim(&to_sim(&p));
+        assert!(position_distance(&p, &back) < 1e-6);
+        assert!(rotation_distance(&p, &back) < 1e-6);
+    }
+
+    #[test]
+    fn a_cylinder_object_is_a_prism_along_z_touching_the_true_cylinder() {
+        let c = object_collider(
+            &Shape::Cylinder {
+                radius: 0.02,
+                length: 0.3,
+            },
+            &Pose::identity(),
+        )
+        .build();
+        let aabb = c.compute_aabb();
+        assert!((aabb.maxs.z - 0.15).abs() < 1e-6, "{aabb:?}");
+        assert!((aabb.maxs.y - 0.02).abs() < 1e-6, "{aabb:?}");
+    }
+}
