@@ -11,6 +11,7 @@ use crate::convert::{link_collider, to_sim};
 use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
 use akl_planner::Robot;
 use akl_tsr::Pose;
+use rapier3d::pipeline::ActiveHooks;
 use rapier3d::prelude::{
     ActiveCollisionTypes, InteractionGroups, InteractionTestMode, RigidBodyBuilder, RigidBodyHandle,
 };
@@ -39,6 +40,10 @@ impl Arm {
             tcp: robot.tcp_link(),
         };
         arm.compute(robot, q, width);
+        let mut hand = vec![false; robot.links().len()];
+        for &h in robot.hand_links() {
+            hand[h] = true;
+        }
         let physics = &mut sim.physics;
         for (i, link) in robot.links().iter().enumerate() {
             if link.shapes.is_empty() {
@@ -50,8 +55,14 @@ impl Arm {
                     .pose(to_sim(&arm.poses[i]))
                     .build(),
             );
+            let hooks = if hand[i] {
+                ActiveHooks::FILTER_CONTACT_PAIRS
+            } else {
+                ActiveHooks::empty()
+            };
             for shape in &link.shapes {
                 let collider = link_collider(&shape.geometry, &shape.origin)
+                    .active_hooks(hooks)
                     .friction(LINK_FRICTION as f32)
                     .restitution(0.0)
                     .collision_groups(InteractionGroups::new(
@@ -67,6 +78,7 @@ impl Arm {
             }
             arm.bodies.push(Some(body));
         }
+        sim.set_hand_links(hand);
         arm
     }
 
