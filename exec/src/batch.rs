@@ -1,0 +1,199 @@
+//! Batches of trials: one spec executed in N worlds, in parallel, reproducibly.
+//!
+//! Trial i places the objects with seed `seed + i` (or leaves them where the task file has
+//! them) and plans with the same seed. Each trial builds its own rapier world and runs
+//! single-threaded, so a batch gives the same reports whatever the number of threads.
+
+use crate::error::ExecError;
+use crate::report::{BatchReport, TrialReport};
+use crate::trial::{run_trial, trial_world, ExecOptions, Setup, Timeline};
+use akl_planner::Robot;
+use akl_scene::{Task, World};
+use akl_tsr::TaskSpec;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Which trials a batch runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BatchOptions {
+    /// Number of trials (at least 1).
+    pub trials: usize,
+    /// Whether objects are moved within the task's ranges (else every trial uses the task's
+    /// own placements).
+    pub randomize: bool,
+    /// Seed of the first trial.
+    pub seed: u64,
+    /// Worker threads (at least 1).
+    pub jobs: usize,
+}
+
+/// A spec ready to be executed on a task: references checked, worlds placed.
+pub struct Batch<'a> {
+    setup: Setup<'a>,
+    options: BatchOptions,
+    worlds: Vec<World>,
+}
+
+impl<'a> Batch<'a> {
+    /// Checks the spec against the task and places the objects of every trial.
+    pub fn new(
+        robot: &'a Robot,
+        task: &'a Task,
+        spec: &'a TaskSpec,
+        exec: &'a ExecOptions,
+        options: BatchOptions,
+    ) -> Result<Batch<'a>, ExecError> {
+        if options.trials == 0 {
+            return Err(ExecError::Options(
+                "a batch needs at least one trial".into(),
+            ));
+        }
+        if options.jobs == 0 {
+            return Err(ExecError::Options("a batch needs at least one job".into()));
+        }
+        spec.validate()?;
+        spec.check_references(task.world.names())?;
+        let worlds = (0..options.trials)
+            .map(|i| trial_world(task, options.randomize, trial_seed(options.seed, i)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Batch {
+            setup: Setup {
+                robot,
+                task,
+                spec,
+                options: exec,
+            },
+            options,
+            worlds,
+        })
+    }
+
+    /// Runs every trial on [`BatchOptions::jobs`] threads, calling `progress` after each
+    /// (from the worker that ran it).
+    pub fn run(&self, progress: &(dyn Fn(&TrialReport) + Sync)) -> Result<BatchReport, ExecError> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(self.options.jobs)
+            .build()
+            .map_err(|e| {
+                ExecError::Options(format!("cannot start {} jobs: {e}", self.options.jobs))
+            })?;
+        let started = Instant::now();
+        let reports: Vec<TrialReport> = pool.install(|| {
+            (0..self.options.trials)
+                .into_par_iter()
+                .map(|i| {
+                    let r = self.trial(i, None);
+                    progress(&r);
+                    r
+                })
+                .collect()
+        });
+        Ok(BatchReport::new(
+            &self.setup.task.name,
+            &self.setup.spec.method,
+            self.options.seed,
+            self.options.randomize,
+            reports,
+            self.options.jobs,
+            started.elapsed().as_secs_f64(),
+        ))
+    }
+
+    /// Runs trial `i` alone (it gives the same report as in the batch), recording its frames
+    /// at `rate` per simulated second for a trace.
+    pub fn record(&self, i: usize, rate: f64) -> (TrialReport, Timeline) {
+        let mut timeline = Timeline::new(rate);
+        let report = self.trial(i, Some(&mut timeline));
+        (report, timeline)
+    }
+
+    fn trial(&self, i: usize, timeline: Option<&mut Timeline>) -> TrialReport {
+        let seed = trial_seed(self.options.seed, i);
+        run_trial(&self.setup, i, seed, &self.worlds[i], timeline)
+    }
+
+    /// The world trial `i` runs in.
+    pub fn world(&self, i: usize) -> Option<&World> {
+        self.worlds.get(i)
+    }
+
+    /// The robot, task, spec and settings.
+    pub fn setup(&self) -> &Setup<'a> {
+        &self.setup
+    }
+}
+
+/// The seed of trial `i` of a batch seeded `seed`.
+pub fn trial_seed(seed: u64, i: usize) -> u64 {
+    seed.wrapping_add(i as u64)
+}
+
+/// The trial a trace should show: the first that failed, else the first.
+pub fn trial_to_trace(report: &BatchReport) -> usize {
+    report
+        .reports
+        .iter()
+        .find(|r| !r.passed)
+        .map_or(0, |r| r.trial)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    fn strip(mut r: TrialReport) -> TrialReport {
+        r.plan_seconds = 0.0;
+        r.sim_seconds = 0.0;
+        r
+    }
+
+    #[test]
+    fn trials_are_reproducible_whatever_the_threads() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let exec = ExecOptions::default();
+        let options = |jobs| BatchOptions {
+            trials: 3,
+            randomize: true,
+            seed: 11,
+            jobs,
+        };
+        let one = Batch::new(&robot, &task, &spec, &exec, options(1)).unwrap();
+        let two = Batch::new(&robot, &task, &spec, &exec, options(2)).unwrap();
+        let seen = AtomicUsize::new(0);
+        let a = one.run(&|_| {
+            seen.fetch_add(1, Ordering::Relaxed);
+        });
+        let a = a.unwrap();
+        let b = two.run(&|_| {}).unwrap();
+        assert_eq!(seen.load(Ordering::Relaxed), 3);
+        assert_eq!(a.passed, 3, "{:?}", a.reports[0].failures);
+        for (x, y) in a.reports.into_iter().zip(b.reports) {
+            assert_eq!(strip(x.clone()), strip(y));
+            let (again, timeline) = one.record(x.trial, 30.0);
+            assert_eq!(strip(again), strip(x));
+            assert!(timeline.frames.len() > 30 && timeline.plan.is_some());
+        }
+    }
+
+    #[test]
+    fn a_spec_naming_an_unknown_object_is_refused() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let mut spec = task.truth.clone().unwrap();
+        spec.keyframes[0].reference = "vase".into();
+        let exec = ExecOptions::default();
+        let options = BatchOptions {
+            trials: 1,
+            randomize: false,
+            seed: 0,
+            jobs: 1,
+        };
+        let e = Batch::new(&robot, &task, &spec, &exec, options)
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("vase"), "{e}");
+    }
+}
