@@ -1,0 +1,547 @@
+//! Analytic inverse kinematics of the Panda with joint 7 as the redundancy parameter.
+//!
+//! Once q7 is fixed, the pose of frame 6 follows from the target. Joints 2, 4 and 6 then form
+//! a triangle (shoulder O2, elbow O4, wrist O6) whose side |O2 O6| fixes q4; the elbow lies on
+//! a circle about the line O2–O6, and the wrist condition z5 ⟂ z6 (joint 5's axis is frame 4's
+//! y axis) picks at most two points on it. Each elbow point fixes frame 4, from which q5, q6
+//! (a Y–Z rotation) and q1, q2, q3 (a Z–Y–Z rotation, two branches) follow in closed form: up
+//! to eight candidates per q7 (He & Liu 2021 derive the same family). q7 is searched on a grid
+//! outward from the seed's q7, with branch and bound on the distance to the seed, then refined.
+//!
+//! Lengths come from the URDF: [`PandaIk::from_kinematics`] checks that the arm has the
+//! Panda's modified-DH structure and reads d1, d3, a4, a5, d5 and a7 from the joint origins.
+
+use crate::fk::{Drive, Kinematics, Motion};
+use akl_tsr::nalgebra::{Matrix3, Rotation3, Vector3};
+use akl_tsr::Pose;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Number of arm joints the solver handles.
+pub const DOF: usize = 7;
+
+/// Grid step of the q7 search (radians).
+pub const Q7_STEP: f64 = 0.2;
+
+/// Grid step of the second, finer q7 sweep run when the coarse one finds nothing (radians).
+pub const Q7_FINE_STEP: f64 = 0.01;
+
+/// Largest position error (metres) a candidate may have once checked by forward kinematics.
+pub const POSITION_TOLERANCE: f64 = 1e-6;
+
+/// Largest rotation error (radians) a candidate may have once checked by forward kinematics.
+pub const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// The twist angles of the Panda's modified DH parameters, joints 1 to 7.
+const ALPHA: [f64; DOF] = [
+    0.0, -FRAC_PI_2, FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, FRAC_PI_2, FRAC_PI_2,
+];
+
+/// The analytic Panda solver: the arm's lengths, limits and the TCP offset from frame 7.
+#[derive(Debug, Clone)]
+pub struct PandaIk {
+    d1: f64,
+    d3: f64,
+    a4: f64,
+    a5: f64,
+    d5: f64,
+    a7: f64,
+    tcp_in_7: Pose,
+    seven_in_tcp: Pose,
+    limits: [[f64; 2]; DOF],
+}
+
+/// One joint's modified DH parameters (a, d) recovered from its URDF origin.
+fn dh_of(origin: &Pose, alpha: f64) -> Result<(f64, f64), String> {
+    let expected = Rotation3::from_axis_angle(&Vector3::x_axis(), alpha);
+    let angle = origin.rotation.to_rotation_matrix().angle_to(&expected);
+    if angle > 1e-9 {
+        return Err(format!(
+            "origin rotation is not a turn of {alpha:.4} rad about x"
+        ));
+    }
+    let t = origin.translation.vector;
+    let (s, c) = alpha.sin_cos();
+    // t = (a, -d sin(alpha), d cos(alpha))
+    let d = -t.y * s + t.z * c;
+    let residual = (t.y + d * s).abs() + (t.z - d * c).abs();
+    if residual > 1e-9 {
+        return Err("origin translation does not fit (a, -d sin α, d cos α)".into());
+    }
+    Ok((t.x, d))
+}
+
+impl PandaIk {
+    /// Reads the Panda's lengths from compiled kinematics, checking the structure: seven
+    /// revolute joints about z directly after one another from the base, with the Panda's
+    /// twists and zero offsets where the Panda has them, and only fixed joints to the TCP.
+    pub fn from_kinematics(kin: &Kinematics, limits: &[[f64; 2]]) -> Result<Self, String> {
+        if kin.dof() != DOF || limits.len() != DOF {
+            return Err(format!(
+                "the panda solver needs 7 arm joints, this arm has {}",
+                kin.dof()
+            ));
+        }
+        let links = kin.links();
+        let tcp = kin.tcp_index();
+        let mut path = vec![tcp];
+        while let Some(p) = links[*path.last().unwrap_or(&tcp)].parent {
+            path.push(p);
+        }
+        path.reverse();
+        // path: base, joint 1 .. joint 7, then fixed links to the TCP.
+        if path.len() < 1 + DOF {
+            return Err("the TCP is not seven joints away from the base".into());
+        }
+        if links[path[0]].origin.translation.vector.norm() > 0.0
+            || links[path[0]].origin.rotation.angle() > 0.0
+        {
+            return Err("the base link has a non-identity origin".into());
+        }
+        let mut ad = [(0.0, 0.0); DOF];
+        for (k, &i) in path[1..=DOF].iter().enumerate() {
+            let link = &links[i];
+            let at = |e: String| format!("joint `{}` (joint {}): {e}", link.joint, k + 1);
+            match link.motion {
+                Motion::Revolute {
+                    axis,
+                    drive:
+                        Drive::Arm {
+                            index,
+                            scale,
+                            offset,
+                        },
+                } if index == k
+                    && scale == 1.0
+                    && offset == 0.0
+                    && (axis.into_inner() - Vector3::z()).norm() < 1e-12 => {}
+                _ => return Err(at("must be arm joint revolving about +z".into())),
+            }
+            ad[k] = dh_of(&link.origin, ALPHA[k]).map_err(at)?;
+        }
+        let zero = [
+            ("a1", ad[0].0),
+            ("a2", ad[1].0),
+            ("d2", ad[1].1),
+            ("a3", ad[2].0),
+            ("d4", ad[3].1),
+            ("a6", ad[5].0),
+            ("d6", ad[5].1),
+            ("d7", ad[6].1),
+        ];
+        if let Some((name, v)) = zero.iter().find(|(_, v)| v.abs() > 1e-9) {
+            return Err(format!("the panda solver needs {name} = 0, found {v}"));
+        }
+        let mut tcp_in_7 = Pose::identity();
+        for &i in &path[1 + DOF..] {
+            if links[i].motion != Motion::Fixed {
+                return Err(format!(
+                    "joint `{}` between joint 7 and the TCP is not fixed",
+                    links[i].joint
+                ));
+            }
+            tcp_in_7 *= links[i].origin;
+        }
+        let mut lim = [[0.0; 2]; DOF];
+        lim.copy_from_slice(limits);
+        Ok(PandaIk {
+            d1: ad[0].1,
+            d3: ad[2].1,
+            a4: ad[3].0,
+            a5: ad[4].0,
+            d5: ad[4].1,
+            a7: ad[6].0,
+            tcp_in_7,
+            seven_in_tcp: tcp_in_7.inverse(),
+            limits: lim,
+        })
+    }
+
+    /// The pose of frame 7 that puts the TCP at `tcp`.
+    pub fn frame7_for(&self, tcp: &Pose) -> Pose {
+        tcp * self.seven_in_tcp
+    }
+
+    /// The TCP offset from frame 7.
+    pub fn tcp_in_7(&self) -> &Pose {
+        &self.tcp_in_7
+    }
+
+    /// Calls `emit` with every in-limit solution that puts frame 7 at `f7` with joint 7 at
+    /// `q7`; `q1_hint` resolves the shoulder singularity (q2 = 0), where only q1 + q3 is fixed.
+    pub fn solve_q7(&self, f7: &Pose, q7: f64, q1_hint: f64, mut emit: impl FnMut([f64; DOF])) {
+        if q7 < self.limits[6][0] || q7 > self.limits[6][1] {
+            return;
+        }
+        let r7: Matrix3<f64> = f7.rotation.to_rotation_matrix().into_inner();
+        let o7 = f7.translation.vector;
+        let (s7, c7) = q7.sin_cos();
+        let x6 = r7 * Vector3::new(c7, -s7, 0.0);
+        let y6 = -r7.column(2).into_owned();
+        let z6 = r7 * Vector3::new(s7, c7, 0.0);
+        let o6 = o7 - self.a7 * x6;
+        let o2 = Vector3::new(0.0, 0.0, self.d1);
+        let v = o6 - o2;
+        let l = v.norm();
+        if l < 1e-9 {
+            return;
+        }
+        let l24_sq = self.d3 * self.d3 + self.a4 * self.a4;
+        let l46_sq = self.a5 * self.a5 + self.d5 * self.d5;
+        let k = 0.5 * (l * l - l24_sq - l46_sq);
+        let a = self.a5 * self.a4 + self.d5 * self.d3;
+        let b = self.a5 * self.d3 - self.d5 * self.a4;
+        let r = a.hypot(b);
+        if k.abs() > r {
+            return;
+        }
+        let gamma = b.atan2(a);
+        let delta = (k / r).acos();
+        let n = v / l;
+        let t = (l24_sq - l46_sq + l * l) / (2.0 * l);
+        let rho_sq = l24_sq - t * t;
+        if rho_sq <= 0.0 {
+            return;
+        }
+        let rho = rho_sq.sqrt();
+        let c = o2 + t * n;
+        let helper = if n.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let e1 = n.cross(&helper).normalize();
+        let e2 = n.cross(&e1);
+        let (p, q) = (e1.dot(&z6), e2.dot(&z6));
+        let h = p.hypot(q);
+        if h < 1e-12 {
+            return;
+        }
+        let psi = q.atan2(p);
+        for q4 in [gamma + delta, gamma - delta] {
+            let Some(q4) = fit(q4, self.limits[3]) else {
+                continue;
+            };
+            let (s4, c4) = q4.sin_cos();
+            let (ux, uy) = (self.a5, self.d5);
+            let (wx, wy) = (
+                -(self.d3 * s4 + self.a4 * c4),
+                -(self.d3 * c4 - self.a4 * s4),
+            );
+            let det = ux * wy - uy * wx;
+            let kk = (ux - wx) * rho;
+            if det.abs() < 1e-12 || kk.abs() < 1e-12 {
+                continue;
+            }
+            let s = (ux * (o2 - c) - wx * (o6 - c)).dot(&z6) / kk;
+            if s.abs() > h {
+                continue;
+            }
+            let eps = (s / h).acos();
+            for phi in [psi + eps, psi - eps] {
+                let radial = phi.cos() * e1 + phi.sin() * e2;
+                let o4 = c + rho * radial;
+                let u = o6 - o4;
+                let w = o2 - o4;
+                let x4 = ((wy * u - uy * w) / det).normalize();
+                let y4 = (ux * w - wx * u) / det;
+                let y4 = (y4 - x4 * x4.dot(&y4)).normalize();
+                let z4 = x4.cross(&y4);
+                // R4ᵀ·R6 = Ry(q5)·Rz(q6): q5 from its third column, q6 from its second row.
+                let (Some(q5), Some(q6)) = (
+                    fit(x4.dot(&z6).atan2(z4.dot(&z6)), self.limits[4]),
+                    fit(y4.dot(&x6).atan2(y4.dot(&y6)), self.limits[5]),
+                ) else {
+                    continue;
+                };
+                // R3 = R4·Rz(-q4)·Rx(-π/2): columns c·x4 - s·y4, -z4, s·x4 + c·y4.
+                let x3 = c4 * x4 - s4 * y4;
+                let z3 = s4 * x4 + c4 * y4;
+                let r3 = Matrix3::from_columns(&[x3, -z4, z3]);
+                self.shoulder(&r3, q1_hint, |q1, q2, q3| {
+                    emit([q1, q2, q3, q4, q5, q6, q7])
+                });
+            }
+        }
+    }
+
+    /// q1, q2, q3 from R3 = Rz(q1)·Ry(q2)·Rz(q3), both branches, fitted into the limits.
+    fn shoulder(&self, r3: &Matrix3<f64>, q1_hint: f64, mut emit: impl FnMut(f64, f64, f64)) {
+        let s2 = r3[(0, 2)].hypot(r3[(1, 2)]);
+        let c2 = r3[(2, 2)];
+        let mut candidates = [[f64::NAN; 3]; 2];
+        if s2 < 1e-9 {
+            // q2 = 0: only q1 + q3 is determined; keep q1 at the hint.
+            let sum = r3[(1, 0)].atan2(r3[(0, 0)]);
+            let q1 = q1_hint.clamp(self.limits[0][0], self.limits[0][1]);
+            candidates[0] = [q1, 0.0, sum - q1];
+        } else {
+            candidates[0] = [
+                r3[(1, 2)].atan2(r3[(0, 2)]),
+                s2.atan2(c2),
+                r3[(2, 1)].atan2(-r3[(2, 0)]),
+            ];
+            candidates[1] = [
+                (-r3[(1, 2)]).atan2(-r3[(0, 2)]),
+                (-s2).atan2(c2),
+                (-r3[(2, 1)]).atan2(r3[(2, 0)]),
+            ];
+        }
+        for [q1, q2, q3] in candidates {
+            if q1.is_nan() {
+                continue;
+            }
+            if let (Some(q1), Some(q2), Some(q3)) = (
+                fit(q1, self.limits[0]),
+                fit(q2, self.limits[1]),
+                fit(q3, self.limits[2]),
+            ) {
+                emit(q1, q2, q3);
+            }
+        }
+    }
+}
+
+/// The angle equivalent to `a` (modulo 2π) inside `[lo, hi]`, if any.
+pub fn fit(a: f64, [lo, hi]: [f64; 2]) -> Option<f64> {
+    [a, a - 2.0 * PI, a + 2.0 * PI]
+        .into_iter()
+        .find(|v| *v >= lo && *v <= hi)
+}
+
+/// Euclidean distance between two configurations.
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Largest single-joint difference between two configurations.
+pub fn max_step(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+impl PandaIk {
+    fn q7_range(&self) -> [f64; 2] {
+        self.limits[6]
+    }
+
+    /// Whether forward kinematics of `q` puts the TCP at `tcp` within the tolerances.
+    fn verified(kin: &Kinematics, q: &[f64], tcp: &Pose) -> bool {
+        let got = kin.tcp_pose(q);
+        (got.translation.vector - tcp.translation.vector).norm() <= POSITION_TOLERANCE
+            && got.rotation.angle_to(&tcp.rotation) <= ROTATION_TOLERANCE
+    }
+
+    /// The solution nearest `seed` (Euclidean in joint space) among those on the q7 grid
+    /// around the seed's q7, refined by bisection in q7; `None` if the pose is unreachable.
+    pub fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Option<[f64; DOF]> {
+        let f7 = self.frame7_for(tcp);
+        let [lo, hi] = self.q7_range();
+        let mut best: Option<([f64; DOF], f64)> = None;
+        let consider = |q7: f64, best: &mut Option<([f64; DOF], f64)>| {
+            let mut improved = false;
+            self.solve_q7(&f7, q7, seed[0], |c| {
+                let d = distance(&c, seed);
+                if best.is_none_or(|(_, bd)| d < bd) {
+                    *best = Some((c, d));
+                    improved = true;
+                }
+            });
+            improved
+        };
+        let s7 = seed[6].clamp(lo, hi);
+        consider(s7, &mut best);
+        let mut k = 1.0;
+        loop {
+            let offset = k * Q7_STEP;
+            if best.is_some_and(|(_, d)| offset >= d) || (s7 + offset > hi && s7 - offset < lo) {
+                break;
+            }
+            for q7 in [s7 + offset, s7 - offset] {
+                consider(q7, &mut best);
+            }
+            k += 1.0;
+        }
+        if best.is_none() {
+            let mut q7 = lo;
+            while q7 <= hi {
+                consider(q7, &mut best);
+                q7 += Q7_FINE_STEP;
+            }
+        }
+        let (mut q, _) = best?;
+        let mut h = 0.5 * Q7_STEP;
+        for _ in 0..6 {
+            let centre = q[6];
+            for q7 in [centre - h, centre + h] {
+                if consider(q7, &mut best) {
+                    q = best.map_or(q, |b| b.0);
+                }
+            }
+            h *= 0.5;
+        }
+        Self::verified(kin, &q, tcp).then_some(q)
+    }
+
+    /// The nearest solution (see [`PandaIk::nearest`]), then distinct solutions from a sweep
+    /// over the whole q7 range, nearest `seed` first; two solutions are distinct when some
+    /// joint differs by more than `spacing` radians.
+    pub fn solutions(
+        &self,
+        kin: &Kinematics,
+        tcp: &Pose,
+        seed: &[f64],
+        max: usize,
+        spacing: f64,
+    ) -> Vec<[f64; DOF]> {
+        let f7 = self.frame7_for(tcp);
+        let [lo, hi] = self.q7_range();
+        let mut all: Vec<([f64; DOF], f64)> = Vec::new();
+        let s7 = seed[6].clamp(lo, hi);
+        for step in [1.5 * Q7_STEP, Q7_FINE_STEP] {
+            let mut k = 0.0;
+            while s7 + k * step <= hi || s7 - k * step >= lo {
+                for q7 in [s7 + k * step, s7 - k * step] {
+                    self.solve_q7(&f7, q7, seed[0], |c| all.push((c, distance(&c, seed))));
+                }
+                k += 1.0;
+            }
+            if !all.is_empty() {
+                break;
+            }
+        }
+        all.sort_by(|a, b| a.1.total_cmp(&b.1));
+        // The grid can step over narrow q7 windows where the solutions nearest the seed lie;
+        // the refined nearest solution goes first.
+        if let Some(q) = self.nearest(kin, tcp, seed) {
+            all.insert(0, (q, 0.0));
+        }
+        let mut kept: Vec<[f64; DOF]> = Vec::new();
+        for (c, _) in all {
+            if kept.len() >= max {
+                break;
+            }
+            if kept.iter().all(|k| max_step(k, &c) > spacing) && Self::verified(kin, &c, tcp) {
+                kept.push(c);
+            }
+        }
+        kept
+    }
+
+    /// A solution that no joint reaches by moving more than `max_joint_step` from `previous`:
+    /// q7 is kept at its previous value if possible, else moved as little as needed.
+    pub fn continuous(
+        &self,
+        kin: &Kinematics,
+        tcp: &Pose,
+        previous: &[f64],
+        max_joint_step: f64,
+    ) -> Option<[f64; DOF]> {
+        let f7 = self.frame7_for(tcp);
+        let mut best: Option<([f64; DOF], f64)> = None;
+        let consider = |q7: f64, best: &mut Option<([f64; DOF], f64)>| {
+            self.solve_q7(&f7, q7, previous[0], |c| {
+                let d = max_step(&c, previous);
+                if d <= max_joint_step && best.is_none_or(|(_, bd)| d < bd) {
+                    *best = Some((c, d));
+                }
+            });
+        };
+        consider(previous[6], &mut best);
+        let step = 0.1 * max_joint_step;
+        let mut offset = step;
+        while best.is_none() && offset <= max_joint_step {
+            consider(previous[6] + offset, &mut best);
+            consider(previous[6] - offset, &mut best);
+            offset += step;
+        }
+        let (q, _) = best?;
+        Self::verified(kin, &q, tcp).then_some(q)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Robot;
+    use proptest::prelude::*;
+
+    fn arb_q() -> impl Strategy<Value = Vec<f64>> {
+        let robot = Robot::panda().unwrap();
+        robot
+            .joint_limits()
+            .iter()
+            .map(|[lo, hi]| *lo..*hi)
+            .collect::<Vec<_>>()
+    }
+
+    fn close(robot: &Robot, q: &[f64], target: &Pose) -> bool {
+        let got = robot.tcp_pose(q);
+        (got.translation.vector - target.translation.vector).norm() < 1e-6
+            && got.rotation.angle_to(&target.rotation) < 1e-6
+    }
+
+    fn within_limits(robot: &Robot, q: &[f64]) -> bool {
+        robot.check_joints(q).is_ok()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        #[test]
+        fn ik_of_fk_reproduces_the_pose(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sol = robot.ik(&target, robot.ready()).unwrap();
+            prop_assert!(close(&robot, &sol, &target));
+            prop_assert!(within_limits(&robot, &sol));
+        }
+
+        #[test]
+        fn seeded_with_the_answer_ik_returns_it(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sol = robot.ik(&target, &q).unwrap();
+            prop_assert!(max_step(&sol, &q) < 1e-6, "{sol:?} vs {q:?}");
+        }
+
+        #[test]
+        fn every_listed_solution_reaches_the_pose(q in arb_q()) {
+            let robot = Robot::panda().unwrap();
+            let target = robot.tcp_pose(&q);
+            let sols = robot.ik_solutions(&target, robot.ready(), 8);
+            prop_assert!(!sols.is_empty());
+            for s in &sols {
+                prop_assert!(close(&robot, s, &target) && within_limits(&robot, s));
+            }
+        }
+
+        #[test]
+        fn small_moves_have_continuous_solutions(q in arb_q(), dx in -0.002..0.002f64, dz in -0.002..0.002f64) {
+            let robot = Robot::panda().unwrap();
+            let mut target = robot.tcp_pose(&q);
+            target.translation.vector.x += dx;
+            target.translation.vector.z += dz;
+            if let Some(s) = robot.ik_continuous(&target, &q, 0.1) {
+                prop_assert!(close(&robot, &s, &target));
+                prop_assert!(max_step(&s, &q) <= 0.1);
+            }
+        }
+    }
+
+    #[test]
+    fn a_pose_out_of_reach_is_unreachable() {
+        let robot = Robot::panda().unwrap();
+        let far = akl_tsr::pose::pose_from_xyz([1.5, 0.0, 0.5]);
+        assert_eq!(
+            robot.ik(&far, robot.ready()),
+            Err(crate::error::IkError::Unreachable)
+        );
+        assert!(robot.ik_solutions(&far, robot.ready(), 4).is_empty());
+    }
+}

@@ -1,0 +1,91 @@
+//! Inverse kinematics: the analytic Panda solver and the generic damped least-squares one,
+//! behind one interface that takes TCP poses in the robot base frame.
+
+pub mod analytic;
+pub mod dls;
+
+use crate::error::IkError;
+use crate::fk::Kinematics;
+use akl_tsr::Pose;
+pub use analytic::PandaIk;
+pub use dls::DlsIk;
+
+/// The solver a robot uses (chosen in `robot.toml`).
+#[derive(Debug, Clone)]
+pub enum IkSolver {
+    /// Analytic, for the Panda; falls back to `dls` only to follow lines through the few
+    /// poses where the q7 parameterization is singular.
+    Panda {
+        /// The analytic solver.
+        analytic: Box<PandaIk>,
+        /// The numerical fallback.
+        dls: DlsIk,
+    },
+    /// Damped least squares with random restarts.
+    Dls(DlsIk),
+}
+
+impl IkSolver {
+    /// The solution nearest `seed`, or [`IkError::Unreachable`].
+    pub fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Result<Vec<f64>, IkError> {
+        match self {
+            IkSolver::Panda { analytic, .. } => {
+                analytic.nearest(kin, tcp, seed).map(|q| q.to_vec())
+            }
+            IkSolver::Dls(dls) => dls.nearest(kin, tcp, seed),
+        }
+        .ok_or(IkError::Unreachable)
+    }
+
+    /// Up to `max` distinct solutions, nearest `seed` first (empty if unreachable). For the
+    /// Panda: the analytic ones and the one damped least squares reaches from the seed.
+    pub fn solutions(
+        &self,
+        kin: &Kinematics,
+        tcp: &Pose,
+        seed: &[f64],
+        max: usize,
+        spacing: f64,
+    ) -> Vec<Vec<f64>> {
+        match self {
+            IkSolver::Panda { analytic, dls } => {
+                let mut all: Vec<Vec<f64>> = analytic
+                    .solutions(kin, tcp, seed, max, spacing)
+                    .into_iter()
+                    .map(|q| q.to_vec())
+                    .collect();
+                // Descent from the seed finds the solution nearest it even where the q7 grid
+                // steps over it (near q2 = 0 the split between q1 and q3 turns quickly).
+                if let Some(q) = dls.descend(kin, tcp, seed) {
+                    if all.iter().all(|s| analytic::max_step(s, &q) > spacing) {
+                        all.push(q);
+                    }
+                }
+                let distance = |q: &Vec<f64>| -> f64 {
+                    q.iter().zip(seed).map(|(a, b)| (a - b) * (a - b)).sum()
+                };
+                all.sort_by(|a, b| distance(a).total_cmp(&distance(b)));
+                all.truncate(max);
+                all
+            }
+            IkSolver::Dls(dls) => dls.solutions(kin, tcp, seed, max, spacing),
+        }
+    }
+
+    /// A solution within `max_joint_step` of `previous` on every joint, for following paths.
+    pub fn continuous(
+        &self,
+        kin: &Kinematics,
+        tcp: &Pose,
+        previous: &[f64],
+        max_joint_step: f64,
+    ) -> Option<Vec<f64>> {
+        match self {
+            IkSolver::Panda { analytic, dls } => analytic
+                .continuous(kin, tcp, previous, max_joint_step)
+                .map(|q| q.to_vec())
+                .or_else(|| dls.continuous(kin, tcp, previous, max_joint_step)),
+            IkSolver::Dls(dls) => dls.continuous(kin, tcp, previous, max_joint_step),
+        }
+    }
+}

@@ -1,0 +1,33 @@
+//! Robot model, inverse kinematics, collision checking and motion planning for AKL specs.
+//!
+//! A [`Robot`] is loaded from a folder holding a URDF and a `robot.toml` (the Panda is built
+//! in). Its forward kinematics come from the k tree, compiled into flat arrays for speed; its
+//! inverse kinematics are analytic for the Panda and damped least squares otherwise.
+//! Collision checking uses parry3d shapes built from the URDF collision elements and the
+//! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]).
+
+pub mod check;
+pub mod collision;
+pub mod config;
+pub mod error;
+pub mod fk;
+pub mod geometry;
+pub mod goal;
+pub mod ik;
+pub mod line;
+pub mod parry_convert;
+pub mod plan;
+pub mod robot;
+pub mod rrt;
+pub mod shortcut;
+pub mod space;
+pub mod task;
+pub mod timing;
+pub mod urdf_load;
+
+pub use config::RobotConfig;
+pub use error::{IkError, PlanError, RobotError};
+pub use geometry::{Geometry, LinkShape};
+pub use plan::{GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind};
+pub use robot::Robot;
+pub use task::{plan_task, PlanOptions};

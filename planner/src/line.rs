@@ -1,0 +1,138 @@
+//! Straight-line TCP motion: the TCP position moves linearly and its orientation by slerp
+//! between two world poses, sampled densely; each sample is solved by inverse kinematics
+//! seeded from the previous one, rejecting joint jumps, and each step is collision-checked.
+
+use crate::collision::Hit;
+use crate::space::Space;
+use akl_tsr::nalgebra::{Translation3, Vector3};
+use akl_tsr::Pose;
+use std::fmt;
+
+/// Settings of the line planner.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineOptions {
+    /// Largest TCP displacement between samples (metres).
+    pub position_step: f64,
+    /// Largest TCP rotation between samples (radians).
+    pub rotation_step: f64,
+    /// Largest change of any joint between samples (radians); more is a jump.
+    pub max_joint_step: f64,
+    /// Largest distance the TCP may stray from the line (metres).
+    pub tolerance: f64,
+}
+
+impl Default for LineOptions {
+    fn default() -> Self {
+        LineOptions {
+            position_step: 0.005,
+            rotation_step: 0.02,
+            max_joint_step: 0.15,
+            tolerance: 0.001,
+        }
+    }
+}
+
+/// Why a line cannot be followed; `at` is the fraction of the line (0 to 1).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LineFailure {
+    /// No configuration within the joint limits reaches the pose there.
+    LeavesWorkspace {
+        /// Fraction of the line.
+        at: f64,
+    },
+    /// The pose is reachable, but only by a jump of some joint (a configuration change).
+    JointJump {
+        /// Fraction of the line.
+        at: f64,
+    },
+    /// The arm, hand or held object collides there.
+    Collision {
+        /// Fraction of the line.
+        at: f64,
+        /// What collides.
+        hit: Hit,
+    },
+    /// Start and end orientations are half a turn apart: the interpolation is ambiguous.
+    HalfTurn,
+}
+
+impl fmt::Display for LineFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LineFailure::LeavesWorkspace { at } => write!(
+                f,
+                "the line leaves the workspace {:.0} % of the way (no IK solution within the joint limits)",
+                100.0 * at
+            ),
+            LineFailure::JointJump { at } => write!(
+                f,
+                "the line needs a joint jump {:.0} % of the way (the arm would have to change configuration)",
+                100.0 * at
+            ),
+            LineFailure::Collision { at, hit } => {
+                write!(f, "collision {:.0} % of the way: {hit}", 100.0 * at)
+            }
+            LineFailure::HalfTurn => f.write_str(
+                "start and end orientations are half a turn apart; the rotation is ambiguous",
+            ),
+        }
+    }
+}
+
+/// The pose a fraction `s` of the way from `a` to `b` (position lerp, orientation slerp).
+pub fn interpolate(a: &Pose, b: &Pose, s: f64) -> Option<Pose> {
+    let p = a.translation.vector.lerp(&b.translation.vector, s);
+    let r = a.rotation.try_slerp(&b.rotation, s, 1e-9)?;
+    Some(Pose::from_parts(Translation3::from(p), r))
+}
+
+/// Distance from point `p` to the segment from `a` to `b`.
+pub fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let ab = b - a;
+    let len_sq = ab.norm_squared();
+    let t = if len_sq > 0.0 {
+        ((p - a).dot(&ab) / len_sq).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + t * ab - p).norm()
+}
+
+/// Joint waypoints that move the TCP from `from` (where it is at `start`) to `to` on the
+/// straight line, both world poses; `base` is the robot base pose in the world.
+pub fn plan_line(
+    space: &Space,
+    start: &[f64],
+    from: &Pose,
+    to: &Pose,
+    base: &Pose,
+    options: &LineOptions,
+) -> Result<Vec<Vec<f64>>, LineFailure> {
+    let robot = space.checker.robot();
+    let distance = (to.translation.vector - from.translation.vector).norm();
+    let angle = from.rotation.angle_to(&to.rotation);
+    let steps = (distance / options.position_step)
+        .max(angle / options.rotation_step)
+        .ceil()
+        .max(1.0) as usize;
+    let base_inv = base.inverse();
+    let mut path = vec![start.to_vec()];
+    for k in 1..=steps {
+        let s = k as f64 / steps as f64;
+        let pose = interpolate(from, to, s).ok_or(LineFailure::HalfTurn)?;
+        let target = base_inv * pose;
+        let previous = &path[path.len() - 1];
+        let q = match robot.ik_continuous(&target, previous, options.max_joint_step) {
+            Some(q) => q,
+            None if robot.ik(&target, previous).is_err() => {
+                return Err(LineFailure::LeavesWorkspace { at: s })
+            }
+            None => return Err(LineFailure::JointJump { at: s }),
+        };
+        if let Some(hit) = space.edge(previous, &q) {
+            return Err(LineFailure::Collision { at: s, hit });
+        }
+        path.push(q);
+    }
+    Ok(path)
+}

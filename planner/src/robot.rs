@@ -1,0 +1,468 @@
+//! A robot: its URDF model (urdf-rs + k), compiled kinematics, limits, gripper, collision
+//! settings and inverse kinematics solver. The Panda is built into the binary.
+
+use crate::collision::{MAX_BODIES, MAX_LINKS};
+use crate::config::{IkSolverKind, RobotConfig};
+use crate::error::{IkError, RobotError};
+use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
+use crate::ik::{DlsIk, IkSolver, PandaIk};
+use crate::urdf_load;
+use akl_tsr::Pose;
+use std::path::Path;
+
+/// The Panda's `robot.toml`, embedded so the binary works from any directory.
+pub const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");
+/// The Panda's URDF, embedded.
+pub const PANDA_URDF: &str = include_str!("../../robots/panda/panda.urdf");
+
+/// Distinct-solution spacing used by [`Robot::ik_solutions`] callers by default (radians).
+pub const SOLUTION_SPACING: f64 = 0.1;
+
+/// A loaded robot. Poses taken and returned are in the robot's base frame; joint vectors are
+/// arm configurations in [`Robot::joint_names`] order.
+#[derive(Debug)]
+pub struct Robot {
+    config: RobotConfig,
+    source: String,
+    urdf: urdf_rs::Robot,
+    chain: k::Chain<f64>,
+    kin: Kinematics,
+    arm: ArmJoints,
+    ik: IkSolver,
+    flange: usize,
+    hand_links: Vec<usize>,
+    mount_links: Vec<usize>,
+    allowed_pairs: Vec<(usize, usize)>,
+}
+
+impl Robot {
+    /// The built-in Franka Emika Panda (`robots/panda`).
+    pub fn panda() -> Result<Robot, RobotError> {
+        Robot::from_texts(
+            PANDA_TOML,
+            Path::new("robots/panda/robot.toml"),
+            PANDA_URDF,
+            Path::new("robots/panda/panda.urdf"),
+        )
+    }
+
+    /// Loads the robot folder `dir`: its `robot.toml` and the URDF that names.
+    pub fn load(dir: &Path) -> Result<Robot, RobotError> {
+        let toml_path = dir.join("robot.toml");
+        let read = |path: &Path| {
+            std::fs::read_to_string(path).map_err(|source| RobotError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+        };
+        let toml_text = read(&toml_path)?;
+        let config = RobotConfig::from_toml(&toml_text).map_err(|message| RobotError::Config {
+            path: toml_path.clone(),
+            message,
+        })?;
+        let urdf_path = dir.join(&config.urdf);
+        let urdf_text = read(&urdf_path)?;
+        Robot::from_texts(&toml_text, &toml_path, &urdf_text, &urdf_path)
+    }
+
+    /// Builds a robot from the texts of its `robot.toml` and URDF; the paths name them in errors.
+    pub fn from_texts(
+        toml_text: &str,
+        toml_path: &Path,
+        urdf_text: &str,
+        urdf_path: &Path,
+    ) -> Result<Robot, RobotError> {
+        let config_err = |message: String| RobotError::Config {
+            path: toml_path.to_path_buf(),
+            message,
+        };
+        let urdf_err = |message: String| RobotError::Urdf {
+            path: urdf_path.to_path_buf(),
+            message,
+        };
+        let config = RobotConfig::from_toml(toml_text).map_err(config_err)?;
+        config.validate().map_err(config_err)?;
+        let urdf = urdf_load::parse(urdf_text).map_err(urdf_err)?;
+        let chain = urdf_load::chain(&urdf);
+        let mimics: Mimics = urdf
+            .joints
+            .iter()
+            .filter_map(|j| {
+                j.mimic.as_ref().map(|m| {
+                    (
+                        j.name.clone(),
+                        (
+                            m.joint.clone(),
+                            m.multiplier.unwrap_or(1.0),
+                            m.offset.unwrap_or(0.0),
+                        ),
+                    )
+                })
+            })
+            .collect();
+        let (kin, arm) =
+            Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &mimics)
+                .map_err(urdf_err)?;
+        let shapes: usize = kin.links().iter().map(|l| l.shapes.len()).sum();
+        if kin.links().len() > MAX_LINKS || shapes > MAX_BODIES {
+            return Err(urdf_err(format!(
+                "{} links with {shapes} collision elements: the planner handles at most {MAX_LINKS} links and {MAX_BODIES} elements",
+                kin.links().len()
+            )));
+        }
+        let dof = kin.dof();
+        for (name, values) in [
+            ("ready", &config.ready),
+            ("velocity_limits", &config.velocity_limits),
+            ("acceleration_limits", &config.acceleration_limits),
+        ] {
+            if values.len() != dof {
+                return Err(config_err(format!(
+                    "{name} has {} values but the arm has {dof} joints ({})",
+                    values.len(),
+                    arm.names.join(", ")
+                )));
+            }
+        }
+        for (i, (v, [lo, hi])) in config.ready.iter().zip(&arm.limits).enumerate() {
+            if v < lo || v > hi {
+                return Err(config_err(format!(
+                    "ready[{i}] = {v} is outside the limits [{lo}, {hi}] of `{}`",
+                    arm.names[i]
+                )));
+            }
+        }
+        let link = |name: &str, field: &str| {
+            kin.link_index(name)
+                .ok_or_else(|| config_err(format!("{field}: `{name}` is not a link of the URDF")))
+        };
+        let flange = link(&config.flange_link, "flange_link")?;
+        let hand_links = config
+            .gripper
+            .hand_links
+            .iter()
+            .map(|n| link(n, "gripper.hand_links"))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mount_links = config
+            .collision
+            .mount_links
+            .iter()
+            .map(|n| link(n, "collision.mount_links"))
+            .collect::<Result<Vec<_>, _>>()?;
+        let allowed_pairs = config
+            .collision
+            .allowed_pairs
+            .iter()
+            .map(|[a, b]| {
+                Ok((
+                    link(a, "collision.allowed_pairs")?,
+                    link(b, "collision.allowed_pairs")?,
+                ))
+            })
+            .collect::<Result<Vec<_>, RobotError>>()?;
+        let dls = DlsIk::new(arm.limits.clone());
+        let ik = match config.ik.solver {
+            IkSolverKind::Panda => IkSolver::Panda {
+                analytic: Box::new(
+                    PandaIk::from_kinematics(&kin, &arm.limits)
+                        .map_err(|e| urdf_err(format!("ik solver `panda`: {e}")))?,
+                ),
+                dls,
+            },
+            IkSolverKind::Dls => IkSolver::Dls(dls),
+        };
+        Ok(Robot {
+            source: toml_path
+                .parent()
+                .map_or_else(String::new, |p| p.display().to_string()),
+            config,
+            urdf,
+            chain,
+            kin,
+            arm,
+            ik,
+            flange,
+            hand_links,
+            mount_links,
+            allowed_pairs,
+        })
+    }
+
+    /// The robot's name from `robot.toml`.
+    pub fn name(&self) -> &str {
+        &self.config.name
+    }
+
+    /// Where the robot was loaded from (a folder, or `robots/panda` for the built-in one).
+    pub fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// The parsed `robot.toml`.
+    pub fn config(&self) -> &RobotConfig {
+        &self.config
+    }
+
+    /// The parsed URDF.
+    pub fn urdf(&self) -> &urdf_rs::Robot {
+        &self.urdf
+    }
+
+    /// The k kinematic tree (the reference forward kinematics).
+    pub fn chain(&self) -> &k::Chain<f64> {
+        &self.chain
+    }
+
+    /// The compiled kinematics used for planning.
+    pub fn kinematics(&self) -> &Kinematics {
+        &self.kin
+    }
+
+    /// Number of arm joints.
+    pub fn dof(&self) -> usize {
+        self.kin.dof()
+    }
+
+    /// Arm joint names, base to tip.
+    pub fn joint_names(&self) -> &[String] {
+        &self.arm.names
+    }
+
+    /// `[lower, upper]` position limits of the arm joints.
+    pub fn joint_limits(&self) -> &[[f64; 2]] {
+        &self.arm.limits
+    }
+
+    /// Velocity limits of the arm joints.
+    pub fn velocity_limits(&self) -> &[f64] {
+        &self.config.velocity_limits
+    }
+
+    /// Acceleration limits of the arm joints.
+    pub fn acceleration_limits(&self) -> &[f64] {
+        &self.config.acceleration_limits
+    }
+
+    /// The ready configuration plans start from.
+    pub fn ready(&self) -> &[f64] {
+        &self.config.ready
+    }
+
+    /// All links, parents first, with their collision geometry (shape and pose in the link).
+    pub fn links(&self) -> &[Link] {
+        self.kin.links()
+    }
+
+    /// Index of the TCP link in [`Robot::links`].
+    pub fn tcp_link(&self) -> usize {
+        self.kin.tcp_index()
+    }
+
+    /// Index of the flange link in [`Robot::links`].
+    pub fn flange_link(&self) -> usize {
+        self.flange
+    }
+
+    /// Indices of the hand links (hand and fingers).
+    pub fn hand_links(&self) -> &[usize] {
+        &self.hand_links
+    }
+
+    /// Indices of the links that may touch the surface the robot stands on.
+    pub fn mount_links(&self) -> &[usize] {
+        &self.mount_links
+    }
+
+    /// Link index pairs never checked against each other.
+    pub fn allowed_pairs(&self) -> &[(usize, usize)] {
+        &self.allowed_pairs
+    }
+
+    /// Gripper finger joint names.
+    pub fn finger_joints(&self) -> &[String] {
+        &self.config.gripper.joints
+    }
+
+    /// Gripper opening width when open (metres).
+    pub fn open_width(&self) -> f64 {
+        self.config.gripper.open_width
+    }
+
+    /// Position of each finger joint for an opening `width` (clamped to `[0, open_width]`).
+    pub fn finger_positions(&self, width: f64) -> Vec<(String, f64)> {
+        let w = width.clamp(0.0, self.open_width());
+        let n = self.finger_joints().len().max(1) as f64;
+        self.finger_joints()
+            .iter()
+            .map(|j| (j.clone(), w / n))
+            .collect()
+    }
+
+    /// Seconds the gripper takes to go from fully open to closed (or back).
+    pub fn gripper_travel_time(&self) -> f64 {
+        self.open_width() / self.finger_joints().len().max(1) as f64 / self.config.gripper.speed
+    }
+
+    /// Checks a configuration: right length, finite, within the limits; the error names the
+    /// joint.
+    pub fn check_joints(&self, q: &[f64]) -> Result<(), String> {
+        if q.len() != self.dof() {
+            return Err(format!(
+                "expected {} joint values ({}), got {}",
+                self.dof(),
+                self.joint_names().join(", "),
+                q.len()
+            ));
+        }
+        for (i, (v, [lo, hi])) in q.iter().zip(self.joint_limits()).enumerate() {
+            if !v.is_finite() {
+                return Err(format!(
+                    "joint {} (`{}`) is not finite",
+                    i + 1,
+                    self.arm.names[i]
+                ));
+            }
+            if v < lo || v > hi {
+                return Err(format!(
+                    "joint {} (`{}`) = {v} is outside its limits [{lo}, {hi}]",
+                    i + 1,
+                    self.arm.names[i]
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Base-frame pose of every link for arm configuration `q` and gripper opening
+    /// `width`, in [`Robot::links`] order: what drives kinematic bodies in a simulation.
+    pub fn link_poses(&self, q: &[f64], width: f64) -> Vec<Pose> {
+        self.kin.link_poses(q, width)
+    }
+
+    /// The TCP pose for `q`.
+    pub fn tcp_pose(&self, q: &[f64]) -> Pose {
+        self.kin.tcp_pose(q)
+    }
+
+    /// The flange pose for `q`.
+    pub fn flange_pose(&self, q: &[f64]) -> Pose {
+        self.kin.link_poses(q, 0.0)[self.flange]
+    }
+
+    /// The arm configuration nearest `seed` that puts the TCP at `tcp`, or
+    /// [`IkError::Unreachable`].
+    pub fn ik(&self, tcp: &Pose, seed: &[f64]) -> Result<Vec<f64>, IkError> {
+        if seed.len() != self.dof() || seed.iter().any(|v| !v.is_finite()) {
+            return Err(IkError::BadSeed(format!(
+                "expected {} finite joint values",
+                self.dof()
+            )));
+        }
+        self.ik.nearest(&self.kin, tcp, seed)
+    }
+
+    /// Up to `max` distinct configurations that put the TCP at `tcp`, nearest `seed` first.
+    pub fn ik_solutions(&self, tcp: &Pose, seed: &[f64], max: usize) -> Vec<Vec<f64>> {
+        self.ik
+            .solutions(&self.kin, tcp, seed, max, SOLUTION_SPACING)
+    }
+
+    /// A configuration for `tcp` no joint of which is more than `max_joint_step` from
+    /// `previous`, for following a path without jumps.
+    pub fn ik_continuous(
+        &self,
+        tcp: &Pose,
+        previous: &[f64],
+        max_joint_step: f64,
+    ) -> Option<Vec<f64>> {
+        self.ik.continuous(&self.kin, tcp, previous, max_joint_step)
+    }
+
+    /// The inverse kinematics solver.
+    pub fn ik_solver(&self) -> &IkSolver {
+        &self.ik
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn panda_dir() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/panda")
+    }
+
+    #[test]
+    fn the_folder_and_the_embedded_panda_agree() {
+        let embedded = Robot::panda().unwrap();
+        let loaded = Robot::load(&panda_dir()).unwrap();
+        assert_eq!(embedded.joint_names(), loaded.joint_names());
+        assert_eq!(embedded.dof(), 7);
+        assert_eq!(embedded.finger_joints().len(), 2);
+        assert!(matches!(embedded.ik_solver(), IkSolver::Panda { .. }));
+    }
+
+    #[test]
+    fn robot_toml_agrees_with_the_urdf_velocity_limits() {
+        let robot = Robot::panda().unwrap();
+        for (name, v) in robot.joint_names().iter().zip(robot.velocity_limits()) {
+            let joint = robot
+                .urdf()
+                .joints
+                .iter()
+                .find(|j| j.name == *name)
+                .unwrap();
+            assert_eq!(joint.limit.velocity, *v, "{name}");
+        }
+    }
+
+    fn with_toml(edit: impl Fn(String) -> String) -> Result<Robot, RobotError> {
+        Robot::from_texts(
+            &edit(PANDA_TOML.to_string()),
+            Path::new("r/robot.toml"),
+            PANDA_URDF,
+            Path::new("r/panda.urdf"),
+        )
+    }
+
+    #[test]
+    fn configuration_errors_name_the_file_and_field() {
+        let e = with_toml(|t| t.replace("tcp_link = \"panda_tcp\"", "tcp_link = \"nose\""))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("r/panda.urdf") && e.contains("`nose`"), "{e}");
+        let e =
+            with_toml(|t| t.replace("acceleration_limits = [15.0, ", "acceleration_limits = ["))
+                .unwrap_err()
+                .to_string();
+        assert!(
+            e.contains("r/robot.toml") && e.contains("acceleration_limits has 6"),
+            "{e}"
+        );
+        let e = with_toml(|t| t.replace("arm_margin = 0.01", "arm_margin = -1.0"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("collision.arm_margin"), "{e}");
+        let e = with_toml(|t| t.replace("name = \"panda\"", "name = 3"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("r/robot.toml") && e.contains("line"), "{e}");
+    }
+
+    #[test]
+    fn a_missing_folder_is_named() {
+        let e = Robot::load(Path::new("/nonexistent/robot"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("/nonexistent/robot/robot.toml") && e.contains("cannot read"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_dls_solver_can_be_chosen() {
+        let robot = with_toml(|t| t.replace("solver = \"panda\"", "solver = \"dls\"")).unwrap();
+        assert!(matches!(robot.ik_solver(), IkSolver::Dls(_)));
+    }
+}

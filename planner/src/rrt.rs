@@ -1,0 +1,227 @@
+//! RRT-Connect (Kuffner & LaValle 2000) in joint space: two trees, one from the start and
+//! one from every goal configuration, each extension greedily connecting the other tree.
+
+use crate::space::{distance, Space};
+use rand::Rng;
+
+/// Settings of RRT-Connect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RrtOptions {
+    /// Largest joint-space step (Euclidean, radians) of one extension.
+    pub range: f64,
+    /// Samples drawn before giving up.
+    pub max_iterations: usize,
+}
+
+impl Default for RrtOptions {
+    fn default() -> Self {
+        RrtOptions {
+            range: 1.0,
+            max_iterations: 20_000,
+        }
+    }
+}
+
+/// A tree stored flat: node i is `nodes[i*dof..(i+1)*dof]`, with its parent index.
+struct Tree {
+    dof: usize,
+    nodes: Vec<f64>,
+    parents: Vec<usize>,
+    /// Index of the root each node descends from (the goal tree has several roots).
+    roots: Vec<usize>,
+}
+
+const NO_PARENT: usize = usize::MAX;
+
+impl Tree {
+    fn new(dof: usize) -> Tree {
+        Tree {
+            dof,
+            nodes: Vec::new(),
+            parents: Vec::new(),
+            roots: Vec::new(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.parents.len()
+    }
+
+    fn node(&self, i: usize) -> &[f64] {
+        &self.nodes[i * self.dof..(i + 1) * self.dof]
+    }
+
+    fn add(&mut self, q: &[f64], parent: usize) -> usize {
+        let i = self.len();
+        self.nodes.extend_from_slice(q);
+        self.parents.push(parent);
+        self.roots.push(if parent == NO_PARENT {
+            i
+        } else {
+            self.roots[parent]
+        });
+        i
+    }
+
+    fn nearest(&self, q: &[f64]) -> usize {
+        let mut best = 0;
+        let mut best_d = f64::INFINITY;
+        for i in 0..self.len() {
+            let d: f64 = self
+                .node(i)
+                .iter()
+                .zip(q)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            if d < best_d {
+                best_d = d;
+                best = i;
+            }
+        }
+        best
+    }
+
+    /// Nodes from the root down to `i`.
+    fn path_to(&self, mut i: usize) -> Vec<Vec<f64>> {
+        let mut path = Vec::new();
+        while i != NO_PARENT {
+            path.push(self.node(i).to_vec());
+            i = self.parents[i];
+        }
+        path.reverse();
+        path
+    }
+}
+
+enum Extend {
+    Reached(usize),
+    Advanced(usize),
+    Trapped,
+}
+
+/// Extends `tree` one step of at most `range` towards `target`.
+fn extend(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend {
+    let near = tree.nearest(target);
+    let from = tree.node(near).to_vec();
+    let d = distance(&from, target);
+    let (to, reached) = if d <= range {
+        (target.to_vec(), true)
+    } else {
+        let t = range / d;
+        (
+            from.iter()
+                .zip(target)
+                .map(|(a, b)| a + t * (b - a))
+                .collect(),
+            false,
+        )
+    };
+    if !space.edge_valid(&from, &to) {
+        return Extend::Trapped;
+    }
+    let i = tree.add(&to, near);
+    if reached {
+        Extend::Reached(i)
+    } else {
+        Extend::Advanced(i)
+    }
+}
+
+/// Extends `tree` towards `target` until it reaches it or is blocked.
+fn connect(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend {
+    loop {
+        match extend(tree, target, space, range) {
+            Extend::Advanced(_) => continue,
+            other => return other,
+        }
+    }
+}
+
+/// Outcome of a search.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RrtResult {
+    /// A path from the start to one of the goals (index into `goals`).
+    Found {
+        /// Waypoints, start first, goal last.
+        path: Vec<Vec<f64>>,
+        /// Which goal was reached.
+        goal: usize,
+        /// Samples drawn.
+        iterations: usize,
+    },
+    /// No connection within the iteration budget.
+    Exhausted {
+        /// Samples drawn.
+        iterations: usize,
+    },
+}
+
+/// Searches a collision-free path from `start` to any of `goals` (all assumed valid).
+/// Deterministic for a given `rng` state.
+pub fn rrt_connect<R: Rng + ?Sized>(
+    start: &[f64],
+    goals: &[Vec<f64>],
+    space: &Space,
+    options: &RrtOptions,
+    rng: &mut R,
+) -> RrtResult {
+    for (g, goal) in goals.iter().enumerate() {
+        if space.edge_valid(start, goal) {
+            return RrtResult::Found {
+                path: vec![start.to_vec(), goal.clone()],
+                goal: g,
+                iterations: 0,
+            };
+        }
+    }
+    if goals.is_empty() {
+        return RrtResult::Exhausted { iterations: 0 };
+    }
+    let dof = start.len();
+    let mut a = Tree::new(dof);
+    a.add(start, NO_PARENT);
+    let mut b = Tree::new(dof);
+    let mut goal_of_root = Vec::new();
+    for goal in goals {
+        let root = b.add(goal, NO_PARENT);
+        goal_of_root.push((root, goal_of_root.len()));
+    }
+    // `a_is_start` tracks which tree grows from the start after the swaps.
+    let mut a_is_start = true;
+    let mut sample = vec![0.0; dof];
+    for iteration in 1..=options.max_iterations {
+        space.sample(rng, &mut sample);
+        if let Extend::Advanced(new) | Extend::Reached(new) =
+            extend(&mut a, &sample, space, options.range)
+        {
+            let q_new = a.node(new).to_vec();
+            if let Extend::Reached(other) = connect(&mut b, &q_new, space, options.range) {
+                let (start_tree, start_node, goal_tree, goal_node) = if a_is_start {
+                    (&a, new, &b, other)
+                } else {
+                    (&b, other, &a, new)
+                };
+                let mut path = start_tree.path_to(start_node);
+                let mut tail = goal_tree.path_to(goal_node);
+                tail.reverse();
+                // The meeting configuration appears at the end of one and the start of the other.
+                path.extend(tail.into_iter().skip(1));
+                let root = goal_tree.roots[goal_node];
+                let goal = goal_of_root
+                    .iter()
+                    .find(|(r, _)| *r == root)
+                    .map_or(0, |(_, g)| *g);
+                return RrtResult::Found {
+                    path,
+                    goal,
+                    iterations: iteration,
+                };
+            }
+        }
+        std::mem::swap(&mut a, &mut b);
+        a_is_start = !a_is_start;
+    }
+    RrtResult::Exhausted {
+        iterations: options.max_iterations,
+    }
+}

@@ -1,0 +1,70 @@
+//! The joint space a segment is planned in: limits, the collision context (gripper opening,
+//! held object, allowed contacts) and edge validity at the documented resolution.
+
+use crate::collision::{Allowances, Checker, Held, Hit};
+use rand::Rng;
+
+/// Configurations and straight joint-space edges of one planning context.
+pub struct Space<'a> {
+    /// The checker (robot, collision model, scene).
+    pub checker: &'a Checker<'a>,
+    /// Gripper opening during the segment.
+    pub width: f64,
+    /// The object held during the segment, if any.
+    pub held: Option<&'a Held>,
+    /// Contacts allowed during the segment.
+    pub allow: &'a Allowances,
+}
+
+impl Space<'_> {
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.checker.robot().dof()
+    }
+
+    /// The first collision of `q`, if any.
+    pub fn check(&self, q: &[f64]) -> Option<Hit> {
+        self.checker.check(q, self.width, self.held, self.allow)
+    }
+
+    /// Whether `q` is collision-free and within the limits.
+    pub fn valid(&self, q: &[f64]) -> bool {
+        self.check(q).is_none()
+    }
+
+    /// The first collision on the straight edge from `a` to `b`, if any.
+    pub fn edge(&self, a: &[f64], b: &[f64]) -> Option<Hit> {
+        self.checker.edge(a, b, self.width, self.held, self.allow)
+    }
+
+    /// Whether the straight edge from `a` to `b` is collision-free.
+    pub fn edge_valid(&self, a: &[f64], b: &[f64]) -> bool {
+        self.edge(a, b).is_none()
+    }
+
+    /// A configuration drawn uniformly within the joint limits.
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        for (v, [lo, hi]) in out.iter_mut().zip(self.checker.robot().joint_limits()) {
+            *v = rng.gen_range(*lo..=*hi);
+        }
+    }
+}
+
+/// Euclidean distance in joint space.
+pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Total joint-space length of a path.
+pub fn path_length(path: &[Vec<f64>]) -> f64 {
+    path.windows(2).map(|w| distance(&w[0], &w[1])).sum()
+}
+
+/// The point a fraction `t` of the way from `a` to `b`.
+pub fn lerp(a: &[f64], b: &[f64], t: f64) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect()
+}

@@ -1,0 +1,139 @@
+//! Reading a URDF (urdf-rs) and building its kinematic tree (k), after checking the things k
+//! would otherwise panic on or silently drop.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Parses URDF text and checks that it is a single tree of supported joints.
+pub fn parse(text: &str) -> Result<urdf_rs::Robot, String> {
+    let robot = urdf_rs::read_from_string(text).map_err(|e| e.to_string())?;
+    validate(&robot)?;
+    Ok(robot)
+}
+
+/// The k kinematic tree of a validated URDF.
+pub fn chain(robot: &urdf_rs::Robot) -> k::Chain<f64> {
+    k::Chain::from(robot)
+}
+
+/// Checks that links and joints form one tree, joint types are supported, mimic targets exist
+/// and numbers are finite; the error names the joint or link at fault.
+pub fn validate(robot: &urdf_rs::Robot) -> Result<(), String> {
+    let links: BTreeSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
+    if links.len() != robot.links.len() {
+        return Err("two links share a name".into());
+    }
+    let joints: BTreeSet<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
+    if joints.len() != robot.joints.len() {
+        return Err("two joints share a name".into());
+    }
+    let mut parent_of: BTreeMap<&str, &str> = BTreeMap::new();
+    for j in &robot.joints {
+        let at = |problem: String| format!("joint `{}`: {problem}", j.name);
+        for link in [&j.parent.link, &j.child.link] {
+            if !links.contains(link.as_str()) {
+                return Err(at(format!("unknown link `{link}`")));
+            }
+        }
+        if parent_of.insert(&j.child.link, &j.parent.link).is_some() {
+            return Err(at(format!(
+                "link `{}` is the child of more than one joint",
+                j.child.link
+            )));
+        }
+        match &j.joint_type {
+            urdf_rs::JointType::Revolute
+            | urdf_rs::JointType::Continuous
+            | urdf_rs::JointType::Prismatic
+            | urdf_rs::JointType::Fixed => {}
+            other => return Err(at(format!("joint type {other:?} is not supported"))),
+        }
+        let numbers = j.origin.xyz.iter().chain(j.origin.rpy.iter());
+        if numbers.chain(j.axis.xyz.iter()).any(|v| !v.is_finite()) {
+            return Err(at("origin or axis holds a non-finite number".into()));
+        }
+        let axis = j.axis.xyz;
+        if axis.iter().map(|v| v * v).sum::<f64>() < 1e-12 {
+            return Err(at("axis has zero length".into()));
+        }
+        if matches!(
+            j.joint_type,
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic
+        ) && !(j.limit.lower.is_finite()
+            && j.limit.upper.is_finite()
+            && j.limit.lower <= j.limit.upper)
+        {
+            return Err(at(format!(
+                "limits [{}, {}] are not finite and ordered",
+                j.limit.lower, j.limit.upper
+            )));
+        }
+        if let Some(m) = &j.mimic {
+            if !joints.contains(m.joint.as_str()) {
+                return Err(at(format!("mimics unknown joint `{}`", m.joint)));
+            }
+        }
+    }
+    let roots: Vec<&str> = links
+        .iter()
+        .copied()
+        .filter(|l| !parent_of.contains_key(l))
+        .collect();
+    if roots.len() != 1 {
+        return Err(format!(
+            "links must form one tree with one root; roots found: {}",
+            roots.join(", ")
+        ));
+    }
+    // Every link reaches the root without revisiting a link (no cycles).
+    for start in &links {
+        let mut seen = BTreeSet::new();
+        let mut link = *start;
+        while let Some(parent) = parent_of.get(link) {
+            if !seen.insert(link) {
+                return Err(format!("the joints form a cycle through link `{link}`"));
+            }
+            link = parent;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TWO_LINKS: &str = r#"<robot name="r">
+        <link name="a"/><link name="b"/>
+        <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
+          <axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1" effort="1"/></joint>
+        </robot>"#;
+
+    #[test]
+    fn a_simple_tree_parses() {
+        let robot = parse(TWO_LINKS).unwrap();
+        assert_eq!(chain(&robot).dof(), 1);
+    }
+
+    #[test]
+    fn unknown_links_and_mimics_are_named() {
+        let e =
+            parse(&TWO_LINKS.replace(r#"<child link="b"/>"#, r#"<child link="c"/>"#)).unwrap_err();
+        assert!(e.contains("unknown link `c`"), "{e}");
+        let e = parse(&TWO_LINKS.replace(
+            "<axis",
+            r#"<mimic joint="nope" multiplier="1" offset="0"/><axis"#,
+        ))
+        .unwrap_err();
+        assert!(e.contains("mimics unknown joint `nope`"), "{e}");
+    }
+
+    #[test]
+    fn floating_joints_and_forests_are_rejected() {
+        let e = parse(&TWO_LINKS.replace("revolute", "floating")).unwrap_err();
+        assert!(e.contains("not supported"), "{e}");
+        let e =
+            parse(&TWO_LINKS.replace(r#"<link name="b"/>"#, r#"<link name="b"/><link name="c"/>"#))
+                .unwrap_err();
+        assert!(e.contains("one root"), "{e}");
+    }
+}
