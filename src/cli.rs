@@ -151,6 +151,32 @@ pub struct LearnArgs {
     /// Half-widths of every learned TSR: metres on x, y, z and radians on roll, pitch, yaw.
     #[arg(long, value_name = "METRES,RADIANS", default_value = "0.005,0.05")]
     pub bounds: String,
+    /// Read DEMO as a ROS 2 bag: the end effector's geometry_msgs/msg/PoseStamped topic, or
+    /// `tf:FRAME` for a frame of the transform tree.
+    #[arg(long, value_name = "TOPIC|tf:FRAME", help_heading = "ROS 2 bags")]
+    pub ros_ee: Option<String>,
+    /// An object of the bag, by the name the task gives it (repeat for every object).
+    #[arg(
+        long = "ros-object",
+        value_name = "NAME=TOPIC|tf:FRAME",
+        requires = "ros_ee",
+        help_heading = "ROS 2 bags"
+    )]
+    pub ros_objects: Vec<String>,
+    /// The sensor_msgs/msg/JointState topic holding the finger joints.
+    #[arg(
+        long,
+        value_name = "TOPIC",
+        default_value = "/joint_states",
+        help_heading = "ROS 2 bags"
+    )]
+    pub ros_gripper: String,
+    /// The frame the demonstration is expressed in (the robot base of the task's world).
+    #[arg(long, default_value = "world", help_heading = "ROS 2 bags")]
+    pub ros_frame: String,
+    /// The gripper counts as closed while its finger joints sum to less than this (metres).
+    #[arg(long, default_value_t = 0.075, help_heading = "ROS 2 bags")]
+    pub ros_closed_below: f64,
     /// Where to write the spec (JSON).
     #[arg(short, long)]
     pub output: Option<PathBuf>,

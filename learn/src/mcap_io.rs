@@ -21,6 +21,9 @@ use crate::dialogue::{QUERY, SUGGESTION};
 use crate::session::{write_demo, RecordingSink};
 use crate::validate::FrameChecker;
 
+/// The first bytes of every MCAP file.
+pub const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
 /// Longest stretch of recording kept in an unfinished chunk.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 

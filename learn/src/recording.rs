@@ -11,11 +11,8 @@ use std::path::{Path, PathBuf};
 use crate::demo::{Demo, DemoHeader, DialogueEvent};
 use crate::demo_error::DemoError;
 use crate::jsonl::{read_jsonl, JsonlDemoWriter};
-use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation};
+use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation, MCAP_MAGIC};
 use crate::session::{write_demo, RecordingSink};
-
-/// The first bytes of every MCAP file.
-const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 /// The two demonstration formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
