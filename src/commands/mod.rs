@@ -1,5 +1,7 @@
 //! One module per top-level command.
 
+mod plan;
+mod robot;
 mod spec;
 mod task;
 
@@ -11,6 +13,8 @@ pub fn run(cli: Cli) -> CliResult {
     match cli.command {
         Command::Task(cmd) => task::run(cmd),
         Command::Spec(cmd) => spec::run(cmd),
+        Command::Robot(cmd) => robot::run(cmd),
+        Command::Plan(args) => plan::run(args),
     }
 }
 
