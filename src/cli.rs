@@ -30,6 +30,94 @@ pub enum Command {
     Learn(LearnArgs),
     /// Score a learned spec against a ground truth (keyframe, pose and constraint accuracy).
     Score(ScoreArgs),
+    /// Inspect the robot model: joints and limits, forward and inverse kinematics.
+    #[command(subcommand)]
+    Robot(RobotCommand),
+    /// Plan a spec for the robot in a task's world: one timed joint trajectory.
+    ///
+    /// Each keyframe is grounded on the objects' poses; free segments are planned with
+    /// RRT-Connect and shortcut, move_in_line segments keep the tool centre point on the
+    /// straight line, grasps and releases are approached along the tool axis. Prints per
+    /// segment its kind, duration and planning time.
+    ///
+    /// Exit codes: 0 planned; 2 bad input (a missing or invalid spec file, an unknown task, a
+    /// spec naming objects the task does not have, a bad robot folder); 1 the spec cannot be
+    /// planned (the message names the keyframe or segment and why: unreachable, no
+    /// collision-free IK solution, planning budget exhausted, the line leaves the workspace or
+    /// collides) or the output cannot be written.
+    Plan(PlanArgs),
+}
+
+/// `--robot DIR`, shared by the commands that use a robot.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RobotArg {
+    /// Robot folder (robot.toml and its URDF); the built-in Franka Panda if omitted.
+    #[arg(long, value_name = "DIR")]
+    pub robot: Option<PathBuf>,
+}
+
+/// `akl robot ...`
+#[derive(Debug, Subcommand)]
+pub enum RobotCommand {
+    /// Show the robot: joints, limits, ready pose, gripper, links and collision margins.
+    Info {
+        #[command(flatten)]
+        robot: RobotArg,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Forward kinematics: the TCP and flange poses (robot base frame) of a configuration.
+    ///
+    /// Exits with 2 if the joint list is malformed, has the wrong length or leaves the limits.
+    Fk {
+        /// Joint positions in radians, comma-separated, base to tip (e.g. 0,-0.785,0,-2.356,0,1.571,0.785).
+        #[arg(long, value_name = "Q1,...,Qn", allow_hyphen_values = true)]
+        joints: String,
+        #[command(flatten)]
+        robot: RobotArg,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Inverse kinematics: the configuration nearest a seed that puts the TCP at a pose.
+    ///
+    /// The pose is in the robot base frame. Exits with 1 and says "unreachable" if no
+    /// configuration within the joint limits reaches it; with 2 if the input is malformed.
+    Ik {
+        /// Target TCP pose: position (m) and unit quaternion, comma-separated.
+        #[arg(long, value_name = "X,Y,Z,QX,QY,QZ,QW", allow_hyphen_values = true)]
+        pose: String,
+        /// Seed configuration (default: the ready pose).
+        #[arg(long, value_name = "Q1,...,Qn", allow_hyphen_values = true)]
+        seed_joints: Option<String>,
+        #[command(flatten)]
+        robot: RobotArg,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// `akl plan SPEC --task T ...`
+#[derive(Debug, clap::Args)]
+pub struct PlanArgs {
+    /// The spec file to plan.
+    pub spec: PathBuf,
+    /// Task (built-in name or task file) whose world the spec is planned in.
+    #[arg(long)]
+    pub task: String,
+    /// Seed of the planner's random choices (same seed, same plan).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write the full plan (timed trajectory and gripper events) as JSON to this file.
+    #[arg(short = 'o', long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print the per-segment summary as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `akl calibrate`
@@ -151,6 +239,32 @@ pub struct LearnArgs {
     /// Half-widths of every learned TSR: metres on x, y, z and radians on roll, pitch, yaw.
     #[arg(long, value_name = "METRES,RADIANS", default_value = "0.005,0.05")]
     pub bounds: String,
+    /// Read DEMO as a ROS 2 bag: the end effector's geometry_msgs/msg/PoseStamped topic, or
+    /// `tf:FRAME` for a frame of the transform tree.
+    #[arg(long, value_name = "TOPIC|tf:FRAME", help_heading = "ROS 2 bags")]
+    pub ros_ee: Option<String>,
+    /// An object of the bag, by the name the task gives it (repeat for every object).
+    #[arg(
+        long = "ros-object",
+        value_name = "NAME=TOPIC|tf:FRAME",
+        requires = "ros_ee",
+        help_heading = "ROS 2 bags"
+    )]
+    pub ros_objects: Vec<String>,
+    /// The sensor_msgs/msg/JointState topic holding the finger joints.
+    #[arg(
+        long,
+        value_name = "TOPIC",
+        default_value = "/joint_states",
+        help_heading = "ROS 2 bags"
+    )]
+    pub ros_gripper: String,
+    /// The frame the demonstration is expressed in (the robot base of the task's world).
+    #[arg(long, default_value = "world", help_heading = "ROS 2 bags")]
+    pub ros_frame: String,
+    /// The gripper counts as closed while its finger joints sum to less than this (metres).
+    #[arg(long, default_value_t = 0.075, help_heading = "ROS 2 bags")]
+    pub ros_closed_below: f64,
     /// Where to write the spec (JSON).
     #[arg(short, long)]
     pub output: Option<PathBuf>,

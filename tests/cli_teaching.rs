@@ -377,29 +377,34 @@ fn wait_for(path: &Path, bytes: u64) {
     }
 }
 
-#[test]
-fn a_killed_recording_keeps_all_but_its_last_second() {
-    let dir = scratch("kill");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_akl"))
+/// Starts a real-time simulated teaching of `inspection` into `dir/out` and returns once about
+/// six seconds of it are recorded (past the grasp at 4.6 s), with the seconds since start.
+fn teach_for_six_seconds(dir: &Path, out: &str) -> (Child, f64) {
+    let child = Command::new(env!("CARGO_BIN_EXE_akl"))
         .args([
             "teach",
             "--task",
             "inspection",
             "--realtime",
             "-o",
-            "k.mcap",
+            out,
+            "--json",
         ])
-        .current_dir(&dir)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let partial = dir.join("k.mcap.partial");
     let started = Instant::now();
-    // About six seconds of demonstration: past the grasp at 4.6 s.
-    wait_for(&partial, 1);
+    wait_for(&dir.join(format!("{out}.partial")), 1);
     std::thread::sleep(Duration::from_secs(6));
-    let before_kill = started.elapsed().as_secs_f64();
+    (child, started.elapsed().as_secs_f64())
+}
+
+#[test]
+fn a_killed_recording_keeps_all_but_its_last_second() {
+    let dir = scratch("kill");
+    let (mut child, before_kill) = teach_for_six_seconds(&dir, "k.mcap");
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!dir.join("k.mcap").exists());
@@ -420,23 +425,7 @@ fn a_killed_recording_keeps_all_but_its_last_second() {
 #[test]
 fn ctrl_c_ends_a_recording_cleanly() {
     let dir = scratch("sigint");
-    let child = Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args([
-            "teach",
-            "--task",
-            "inspection",
-            "--realtime",
-            "-o",
-            "c.mcap",
-            "--json",
-        ])
-        .current_dir(&dir)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for(&dir.join("c.mcap.partial"), 1);
-    std::thread::sleep(Duration::from_secs(6));
+    let (child, _) = teach_for_six_seconds(&dir, "c.mcap");
     // SAFETY: sending a signal to our own child process.
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
     let o = child.wait_with_output().unwrap();

@@ -88,7 +88,38 @@ pub struct Demo {
     pub events: Vec<DialogueEvent>,
 }
 
+impl DemoHeader {
+    /// The header of a recording of `task` in the world frame, calibration not yet named.
+    pub fn new(task: impl Into<String>) -> Self {
+        DemoHeader {
+            akl_demo: DEMO_VERSION,
+            task: task.into(),
+            frame: akl_tsr::WORLD_FRAME.to_string(),
+            calibration: None,
+        }
+    }
+}
+
 impl Demo {
+    /// A demonstration with no frames yet, tracking the named objects.
+    pub fn empty(header: DemoHeader, objects: &[String]) -> Self {
+        Demo {
+            header,
+            times: Vec::new(),
+            ee: Vec::new(),
+            gripper: Vec::new(),
+            objects: objects
+                .iter()
+                .map(|name| ObjectTrack {
+                    name: name.clone(),
+                    poses: Vec::new(),
+                })
+                .collect(),
+            detector: Vec::new(),
+            events: Vec::new(),
+        }
+    }
+
     /// Number of frames.
     pub fn len(&self) -> usize {
         self.times.len()

@@ -15,7 +15,7 @@ use crate::demo::{
     Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION,
 };
 use crate::demo_error::DemoError;
-use crate::session::RecordingSink;
+use crate::session::{write_demo, RecordingSink};
 use crate::validate::FrameChecker;
 
 /// One frame line as written.
@@ -162,16 +162,7 @@ pub fn read_jsonl(text: &str) -> Result<Demo, DemoError> {
 pub fn write_jsonl(demo: &Demo) -> String {
     let mut out = Vec::new();
     let written = JsonlDemoWriter::new(&mut out, &demo.header).and_then(|mut w| {
-        let mut events = demo.events.iter().peekable();
-        for i in 0..demo.len() {
-            w.write_frame(demo, i)?;
-            while let Some(event) = events.next_if(|e| e.frame <= i) {
-                w.write_event(event)?;
-            }
-        }
-        for event in events {
-            w.write_event(event)?;
-        }
+        write_demo(&mut w, demo)?;
         w.finish()
     });
     // Writing into memory cannot fail, and serde_json writes valid UTF-8.
@@ -271,15 +262,7 @@ struct DemoBuilder {
 impl DemoBuilder {
     fn new(header: DemoHeader) -> Self {
         DemoBuilder {
-            demo: Demo {
-                header,
-                times: Vec::new(),
-                ee: Vec::new(),
-                gripper: Vec::new(),
-                objects: Vec::new(),
-                detector: Vec::new(),
-                events: Vec::new(),
-            },
+            demo: Demo::empty(header, &[]),
             checker: FrameChecker::default(),
             detector_given: None,
         }

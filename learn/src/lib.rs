@@ -16,6 +16,7 @@ pub mod measures;
 pub mod method;
 pub mod okl;
 pub mod recording;
+pub mod ros2;
 pub mod session;
 pub mod teach;
 pub mod teacher;

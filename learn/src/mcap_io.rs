@@ -15,13 +15,14 @@ use akl_tsr::{Gripper, Pose};
 use k::nalgebra::{Quaternion, Translation3, UnitQuaternion};
 use serde_json::{json, Value};
 
-use crate::demo::{
-    Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack, DEMO_VERSION,
-};
+use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, DEMO_VERSION};
 use crate::demo_error::DemoError;
 use crate::dialogue::{QUERY, SUGGESTION};
-use crate::session::RecordingSink;
+use crate::session::{write_demo, RecordingSink};
 use crate::validate::FrameChecker;
+
+/// The first bytes of every MCAP file.
+pub const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 /// Longest stretch of recording kept in an unfinished chunk.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
@@ -206,16 +207,7 @@ impl<W: Write + Seek> McapDemoWriter<W> {
 
     /// Writes a whole demonstration and finishes the file.
     pub fn write_all(mut self, demo: &Demo) -> std::io::Result<W> {
-        let mut events = demo.events.iter().peekable();
-        for i in 0..demo.len() {
-            self.write_frame(demo, i)?;
-            while let Some(e) = events.next_if(|e| e.frame <= i) {
-                self.write_event(e)?;
-            }
-        }
-        for e in events {
-            self.write_event(e)?;
-        }
+        write_demo(&mut self, demo)?;
         self.finish()
     }
 
@@ -357,21 +349,7 @@ pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> 
             header.akl_demo
         )));
     }
-    let mut demo = Demo {
-        header,
-        times: Vec::new(),
-        ee: Vec::new(),
-        gripper: Vec::new(),
-        objects: object_names
-            .iter()
-            .map(|n| ObjectTrack {
-                name: n.clone(),
-                poses: Vec::new(),
-            })
-            .collect(),
-        detector: Vec::new(),
-        events: Vec::new(),
-    };
+    let mut demo = Demo::empty(header, &object_names);
     let mut checker = FrameChecker::default();
     let total = frames.len();
     let mut incomplete_tail = false;

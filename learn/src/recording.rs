@@ -11,11 +11,8 @@ use std::path::{Path, PathBuf};
 use crate::demo::{Demo, DemoHeader, DialogueEvent};
 use crate::demo_error::DemoError;
 use crate::jsonl::{read_jsonl, JsonlDemoWriter};
-use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation};
-use crate::session::RecordingSink;
-
-/// The first bytes of every MCAP file.
-const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation, MCAP_MAGIC};
+use crate::session::{write_demo, RecordingSink};
 
 /// The two demonstration formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -202,16 +199,7 @@ pub fn write_demo_file(path: &Path, demo: &Demo) -> Result<PathBuf, DemoFileErro
         path: partial.clone(),
         source,
     };
-    let mut events = demo.events.iter().peekable();
-    for i in 0..demo.len() {
-        recording.frame(demo, i).map_err(io)?;
-        while let Some(event) = events.next_if(|e| e.frame <= i) {
-            recording.event(event).map_err(io)?;
-        }
-    }
-    for event in events {
-        recording.event(event).map_err(io)?;
-    }
+    write_demo(&mut recording, demo).map_err(io)?;
     recording.finish()
 }
 

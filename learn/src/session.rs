@@ -5,7 +5,7 @@ use akl_tsr::{Gripper, Pose};
 use k::nalgebra::Vector3;
 
 use crate::calibration::Calibration;
-use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, ObjectTrack};
+use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind};
 use crate::detector::Detector;
 use crate::dialogue::{AnswerSource, DialogueError, Question};
 use crate::validate::FrameChecker;
@@ -19,6 +19,19 @@ pub trait RecordingSink {
     fn frame(&mut self, demo: &Demo, index: usize) -> std::io::Result<()>;
     /// A dialogue event was just appended.
     fn event(&mut self, event: &DialogueEvent) -> std::io::Result<()>;
+}
+
+/// Writes a whole recorded `demo` into `sink`, frames and events merged in time order (an
+/// event at the same frame as a frame follows it), as a live session would have.
+pub fn write_demo(sink: &mut dyn RecordingSink, demo: &Demo) -> std::io::Result<()> {
+    let mut events = demo.events.iter().peekable();
+    for i in 0..demo.len() {
+        sink.frame(demo, i)?;
+        while let Some(event) = events.next_if(|e| e.frame <= i) {
+            sink.event(event)?;
+        }
+    }
+    events.try_for_each(|event| sink.event(event))
 }
 
 /// What went wrong in a session.
@@ -60,21 +73,7 @@ impl<'a> TeachingSession<'a> {
     ) -> Self {
         TeachingSession {
             detector: Detector::new(calibration),
-            demo: Demo {
-                header,
-                times: Vec::new(),
-                ee: Vec::new(),
-                gripper: Vec::new(),
-                objects: objects
-                    .iter()
-                    .map(|n| ObjectTrack {
-                        name: n.clone(),
-                        poses: Vec::new(),
-                    })
-                    .collect(),
-                detector: Vec::new(),
-                events: Vec::new(),
-            },
+            demo: Demo::empty(header, objects),
             checker: FrameChecker::default(),
             answers,
             sink: None,

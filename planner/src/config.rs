@@ -1,9 +1,9 @@
 //! `robot.toml`: what the planner needs to know about a robot beyond its URDF.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// The parsed `robot.toml` of a robot folder (see `robots/panda/robot.toml` for the fields).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotConfig {
     /// Short robot name.
@@ -29,7 +29,7 @@ pub struct RobotConfig {
 }
 
 /// The `[ik]` table.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IkConfig {
     /// The solver to use.
@@ -37,7 +37,7 @@ pub struct IkConfig {
 }
 
 /// The inverse kinematics solvers a robot can ask for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum IkSolverKind {
     /// Analytic Panda solver (joint 7 searched); the URDF must have the Panda's joint structure.
@@ -47,7 +47,7 @@ pub enum IkSolverKind {
 }
 
 /// The `[gripper]` table: a symmetric parallel gripper.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GripperConfig {
     /// Finger joints; each moves `width / joints.len()`.
@@ -61,7 +61,7 @@ pub struct GripperConfig {
 }
 
 /// The `[collision]` table.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CollisionConfig {
     /// Clearance between arm links and the world (metres).

@@ -7,7 +7,8 @@ use crate::exit::{CliError, CliResult};
 use akl_learn::method::needs_replay;
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
-use akl_learn::{learn_spec, prepare, LearnOptions, Method};
+use akl_learn::ros2::{import_ros2, PoseSource, Ros2Topics};
+use akl_learn::{learn_spec, prepare, Demo, LearnOptions, Method};
 use akl_scene::builtin;
 use akl_tsr::{Bounds, TaskSpec};
 use serde::Serialize;
@@ -27,11 +28,7 @@ struct Learned<'a> {
 pub fn run(args: LearnArgs) -> CliResult {
     let method: Method = args.method.parse().map_err(CliError::input)?;
     let bounds = parse_bounds(&args.bounds)?;
-    let loaded = read_demo_file(&args.demo).map_err(CliError::input)?;
-    if let Some(t) = &loaded.truncation {
-        eprintln!("warning: {}: {t}", args.demo.display());
-    }
-    let mut demo = loaded.demo;
+    let mut demo = read_demo(&args)?;
     let task = match &args.task {
         Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
         None => builtin::task(&demo.header.task)
@@ -95,6 +92,38 @@ pub fn run(args: LearnArgs) -> CliResult {
         println!("wrote {out}");
     }
     Ok(())
+}
+
+/// The demonstration: a recording, or a ROS 2 bag read through the named topics.
+fn read_demo(args: &LearnArgs) -> Result<Demo, CliError> {
+    let Some(ee) = &args.ros_ee else {
+        let loaded = read_demo_file(&args.demo).map_err(CliError::input)?;
+        if let Some(t) = &loaded.truncation {
+            eprintln!("warning: {}: {t}", args.demo.display());
+        }
+        return Ok(loaded.demo);
+    };
+    let mut objects = Vec::with_capacity(args.ros_objects.len());
+    for spec in &args.ros_objects {
+        let (name, source) = spec.split_once('=').ok_or_else(|| {
+            CliError::input(format!(
+                "--ros-object `{spec}`: expected NAME=TOPIC or NAME=tf:FRAME"
+            ))
+        })?;
+        objects.push((name.to_string(), PoseSource::parse(source)));
+    }
+    let topics = Ros2Topics {
+        task: args.task.clone().unwrap_or_else(|| "unnamed".into()),
+        frame: args.ros_frame.clone(),
+        ee: PoseSource::parse(ee),
+        objects,
+        gripper: args.ros_gripper.clone(),
+        closed_below: args.ros_closed_below,
+    };
+    let bytes = std::fs::read(&args.demo)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
+    import_ros2(&bytes, &topics)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))
 }
 
 /// `METRES,RADIANS` as symmetric TSR bounds.

@@ -2,6 +2,8 @@
 
 mod calibrate;
 mod learn;
+mod plan;
+mod robot;
 mod score;
 mod spec;
 mod task;
@@ -22,6 +24,8 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Teach(args) => teach::run(args),
         Command::Learn(args) => learn::run(args),
         Command::Score(args) => score::run(args),
+        Command::Robot(cmd) => robot::run(cmd),
+        Command::Plan(args) => plan::run(args),
     }
 }
 

@@ -1,14 +1,14 @@
 //! The two calibration movements a teacher makes once (thesis §3.3.1.1): a straight line and a
 //! circle, with the teacher's own speed, tremor and sensor noise.
 
-use akl_tsr::{Gripper, Pose, WORLD_FRAME};
+use akl_tsr::{Gripper, Pose};
 use k::nalgebra::{Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
 use super::profile::TeacherProfile;
-use crate::demo::{Demo, DemoHeader, DEMO_VERSION};
+use crate::demo::{Demo, DemoHeader};
 
 /// Length of the calibration line (m): ten filtered points' worth of errors at D_F = 5 cm.
 pub const LINE_LENGTH: f64 = 0.6;
@@ -74,20 +74,7 @@ fn record(
     let dt = 1.0 / profile.rate;
     let steps = (duration / dt).ceil() as usize;
     let down = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI);
-    let mut demo = Demo {
-        header: DemoHeader {
-            akl_demo: DEMO_VERSION,
-            task: name.into(),
-            frame: WORLD_FRAME.into(),
-            calibration: None,
-        },
-        times: Vec::with_capacity(steps + 1),
-        ee: Vec::with_capacity(steps + 1),
-        gripper: Vec::with_capacity(steps + 1),
-        objects: Vec::new(),
-        detector: Vec::new(),
-        events: Vec::new(),
-    };
+    let mut demo = Demo::empty(DemoHeader::new(name), &[]);
     for k in 0..=steps {
         let t = k as f64 * dt;
         let p = path(min_jerk(k as f64 / steps as f64)) + noise.sample(t, rng);

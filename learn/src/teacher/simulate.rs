@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
 use super::profile::TeacherProfile;
-use crate::demo::{Demo, DemoHeader, ObjectTrack, DEMO_VERSION};
+use crate::demo::{Demo, DemoHeader};
 
 /// Fastest hand rotation the simulated teacher makes (rad/s).
 const ROTATION_SPEED: f64 = 0.8;
@@ -84,26 +84,10 @@ pub fn demonstrate(
         objects: objects.clone(),
         held: None,
         out: SimulatedDemo {
-            demo: Demo {
-                header: DemoHeader {
-                    akl_demo: DEMO_VERSION,
-                    task: task.name.clone(),
-                    frame: WORLD_FRAME.to_string(),
-                    calibration: None,
-                },
-                times: Vec::new(),
-                ee: Vec::new(),
-                gripper: Vec::new(),
-                objects: objects
-                    .iter()
-                    .map(|(n, _)| ObjectTrack {
-                        name: n.clone(),
-                        poses: Vec::new(),
-                    })
-                    .collect(),
-                detector: Vec::new(),
-                events: Vec::new(),
-            },
+            demo: Demo::empty(
+                DemoHeader::new(task.name.clone()),
+                &objects.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
+            ),
             intended_line: Vec::new(),
             unintended_line: Vec::new(),
             marked_keyframes: Vec::new(),

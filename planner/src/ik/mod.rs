@@ -13,8 +13,8 @@ pub use dls::DlsIk;
 /// The solver a robot uses (chosen in `robot.toml`).
 #[derive(Debug, Clone)]
 pub enum IkSolver {
-    /// Analytic, for the Panda; falls back to `dls` only to follow lines through the few
-    /// poses where the q7 parameterization is singular.
+    /// Analytic, for the Panda, with `dls` to follow paths (least-norm steps) and to add the
+    /// solution nearest the seed to the analytic ones.
     Panda {
         /// The analytic solver.
         analytic: Box<PandaIk>,
@@ -81,10 +81,16 @@ impl IkSolver {
         max_joint_step: f64,
     ) -> Option<Vec<f64>> {
         match self {
-            IkSolver::Panda { analytic, dls } => analytic
+            // Descent from the previous configuration takes the least-norm step, which splits
+            // the motion between redundant joints evenly; with q7 held, the analytic solution
+            // can swing q1 and q3 far near q2 = 0. It is the fallback.
+            IkSolver::Panda { analytic, dls } => dls
                 .continuous(kin, tcp, previous, max_joint_step)
-                .map(|q| q.to_vec())
-                .or_else(|| dls.continuous(kin, tcp, previous, max_joint_step)),
+                .or_else(|| {
+                    analytic
+                        .continuous(kin, tcp, previous, max_joint_step)
+                        .map(|q| q.to_vec())
+                }),
             IkSolver::Dls(dls) => dls.continuous(kin, tcp, previous, max_joint_step),
         }
     }

@@ -1,0 +1,525 @@
+//! Importing a demonstration from a ROS 2 bag (MCAP with CDR messages), by naming its topics.
+//!
+//! A robot running ROS 2 records the teacher's demonstration with `ros2 bag record`; AKL reads
+//! the bag directly. The end effector and every object come from a
+//! `geometry_msgs/msg/PoseStamped` topic or from a frame of the transform tree
+//! (`tf2_msgs/msg/TFMessage` on `/tf` and `/tf_static`); the gripper from a
+//! `sensor_msgs/msg/JointState` topic whose finger joints give its opening. Every end-effector
+//! message is a frame; objects and gripper hold their latest value (frames before every stream
+//! has spoken are skipped). Poses given in another frame than the demonstration's are moved
+//! into it through the transform tree.
+
+use std::collections::BTreeMap;
+
+use akl_tsr::{Gripper, Pose};
+use k::nalgebra::{Quaternion, Translation3, UnitQuaternion};
+use serde::{Deserialize, Serialize};
+
+use crate::demo::{Demo, DemoHeader};
+use crate::demo_error::DemoError;
+use crate::mcap_io::MCAP_MAGIC;
+use crate::validate::FrameChecker;
+
+/// Where a pose stream comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PoseSource {
+    /// A `geometry_msgs/msg/PoseStamped` topic.
+    Topic(String),
+    /// A frame of the transform tree (`/tf`, `/tf_static`).
+    Frame(String),
+}
+
+impl PoseSource {
+    /// `tf:FRAME` names a frame of the transform tree; anything else a PoseStamped topic.
+    pub fn parse(text: &str) -> PoseSource {
+        match text.strip_prefix("tf:") {
+            Some(frame) => PoseSource::Frame(frame.to_string()),
+            None => PoseSource::Topic(text.to_string()),
+        }
+    }
+}
+
+/// Which streams of a bag make up the demonstration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ros2Topics {
+    /// The task demonstrated (the recording's header names it).
+    pub task: String,
+    /// The frame every pose is expressed in (the robot base or world frame of the bag).
+    pub frame: String,
+    /// The end effector (tool centre point).
+    pub ee: PoseSource,
+    /// The objects, by name.
+    pub objects: Vec<(String, PoseSource)>,
+    /// The `sensor_msgs/msg/JointState` topic of the gripper.
+    pub gripper: String,
+    /// The gripper counts as closed while the summed position of its finger joints (joints
+    /// whose name contains `finger`, or all of them if none does) is below this (metres).
+    pub closed_below: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct Time {
+    sec: i32,
+    nanosec: u32,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Header {
+    stamp: Time,
+    frame_id: String,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct Vector3Msg {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct QuaternionMsg {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct PoseMsg {
+    position: Vector3Msg,
+    orientation: QuaternionMsg,
+}
+
+/// `geometry_msgs/msg/PoseStamped`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct PoseStamped {
+    header: Header,
+    pose: PoseMsg,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct TransformMsg {
+    translation: Vector3Msg,
+    rotation: QuaternionMsg,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct TransformStamped {
+    header: Header,
+    child_frame_id: String,
+    transform: TransformMsg,
+}
+
+/// `tf2_msgs/msg/TFMessage`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct TfMessage {
+    transforms: Vec<TransformStamped>,
+}
+
+/// `sensor_msgs/msg/JointState`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct JointState {
+    header: Header,
+    name: Vec<String>,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    effort: Vec<f64>,
+}
+
+fn pose_of(p: Vector3Msg, q: QuaternionMsg) -> Result<Pose, String> {
+    let quaternion = Quaternion::new(q.w, q.x, q.y, q.z);
+    let norm = quaternion.norm();
+    if (norm - 1.0).abs() >= 1e-3 || norm.is_nan() {
+        return Err(format!("a quaternion of norm {norm:.4} is not a rotation"));
+    }
+    let values = [p.x, p.y, p.z, q.x, q.y, q.z, q.w];
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err("a pose holds a non-finite number".into());
+    }
+    Ok(Pose::from_parts(
+        Translation3::new(p.x, p.y, p.z),
+        UnitQuaternion::from_quaternion(quaternion),
+    ))
+}
+
+/// The latest transform of every frame to its parent.
+#[derive(Debug, Default)]
+struct TfTree {
+    parent: BTreeMap<String, (String, Pose)>,
+}
+
+impl TfTree {
+    fn insert(&mut self, t: &TransformStamped) -> Result<(), String> {
+        let pose = pose_of(t.transform.translation, t.transform.rotation)?;
+        self.parent
+            .insert(t.child_frame_id.clone(), (t.header.frame_id.clone(), pose));
+        Ok(())
+    }
+
+    /// The pose of `frame` in `root`, following the latest transforms.
+    fn lookup(&self, frame: &str, root: &str) -> Option<Pose> {
+        let mut pose = Pose::identity();
+        let mut at = frame;
+        for _ in 0..=self.parent.len() {
+            if at == root {
+                return Some(pose);
+            }
+            let (parent, to_parent) = self.parent.get(at)?;
+            pose = to_parent * pose;
+            at = parent;
+        }
+        None
+    }
+}
+
+/// The import in progress: the latest value of every stream and the frames made so far.
+struct Importer<'t> {
+    topics: &'t Ros2Topics,
+    tree: TfTree,
+    objects: Vec<Option<Pose>>,
+    gripper: Option<Gripper>,
+    demo: Demo,
+    checker: FrameChecker,
+}
+
+impl Importer<'_> {
+    /// Takes one message of `topic`, logged at `t` seconds.
+    fn take(&mut self, topic: &str, t: f64, data: &[u8]) -> Result<(), String> {
+        let is_tf = topic == "/tf" || topic == "/tf_static";
+        let mut ee_moved = false;
+        if is_tf {
+            let tf: TfMessage = decode(data)?;
+            for transform in &tf.transforms {
+                self.tree.insert(transform)?;
+                ee_moved |= self.topics.ee == PoseSource::Frame(transform.child_frame_id.clone());
+            }
+        }
+        if topic == self.topics.gripper {
+            let state: JointState = decode(data)?;
+            self.gripper = Some(gripper_state(&state, self.topics.closed_below)?);
+        }
+        for (latest, (_, source)) in self.objects.iter_mut().zip(&self.topics.objects) {
+            if *source == PoseSource::Topic(topic.to_string()) {
+                *latest = Some(stamped_pose(data, &self.tree, &self.topics.frame)?);
+            }
+        }
+        let ee = match &self.topics.ee {
+            PoseSource::Topic(ee) if ee == topic => {
+                Some(stamped_pose(data, &self.tree, &self.topics.frame)?)
+            }
+            PoseSource::Frame(f) if ee_moved => self.tree.lookup(f, &self.topics.frame),
+            _ => None,
+        };
+        match ee {
+            Some(ee) => self.push_frame(t, ee),
+            None => Ok(()),
+        }
+    }
+
+    /// Appends a frame at `t`, once the gripper and every object have been heard.
+    fn push_frame(&mut self, t: f64, ee: Pose) -> Result<(), String> {
+        let Some(gripper) = self.gripper else {
+            return Ok(());
+        };
+        let mut poses = Vec::with_capacity(self.objects.len());
+        for (latest, (_, source)) in self.objects.iter().zip(&self.topics.objects) {
+            let pose = match source {
+                PoseSource::Topic(_) => *latest,
+                PoseSource::Frame(f) => self.tree.lookup(f, &self.topics.frame),
+            };
+            match pose {
+                Some(p) => poses.push(p),
+                None => return Ok(()),
+            }
+        }
+        let names: Vec<&str> = self.demo.objects.iter().map(|o| o.name.as_str()).collect();
+        self.checker.check(t, &names)?;
+        self.demo.times.push(t);
+        self.demo.ee.push(ee);
+        self.demo.gripper.push(gripper);
+        for (track, pose) in self.demo.objects.iter_mut().zip(poses) {
+            track.poses.push(pose);
+        }
+        Ok(())
+    }
+}
+
+/// Reads the demonstration `topics` name out of a ROS 2 bag; errors name the topic and the
+/// message that is wrong.
+pub fn import_ros2(bytes: &[u8], topics: &Ros2Topics) -> Result<Demo, DemoError> {
+    if !bytes.starts_with(MCAP_MAGIC) {
+        return Err(DemoError::Format(
+            "not an MCAP file (a ROS 2 bag in MCAP format)".into(),
+        ));
+    }
+    let stream = mcap::MessageStream::new(bytes)
+        .map_err(|e| DemoError::Format(format!("not an MCAP file: {e}")))?;
+    let names: Vec<String> = topics.objects.iter().map(|(n, _)| n.clone()).collect();
+    let header = DemoHeader {
+        frame: topics.frame.clone(),
+        ..DemoHeader::new(topics.task.clone())
+    };
+    let mut importer = Importer {
+        topics,
+        tree: TfTree::default(),
+        objects: vec![None; names.len()],
+        gripper: None,
+        demo: Demo::empty(header, &names),
+        checker: FrameChecker::default(),
+    };
+    let mut counts = BTreeMap::<String, usize>::new();
+    for message in stream {
+        let message = message.map_err(|e| DemoError::Format(format!("reading the bag: {e}")))?;
+        let topic = message.channel.topic.as_str();
+        let count = counts.entry(topic.to_string()).or_default();
+        *count += 1;
+        let t = message.log_time as f64 * 1e-9;
+        importer
+            .take(topic, t, &message.data)
+            .map_err(|m| DemoError::Format(format!("{topic}, message {count}: {m}")))?;
+    }
+    if importer.demo.is_empty() {
+        let heard: Vec<String> = counts.into_keys().collect();
+        return Err(DemoError::Format(format!(
+            "no frame could be made: the end effector, every object and the gripper must all be heard; the bag has {}",
+            if heard.is_empty() {
+                "no messages".into()
+            } else {
+                format!("topics {}", heard.join(", "))
+            }
+        )));
+    }
+    Ok(importer.demo)
+}
+
+fn decode<'de, T: Deserialize<'de>>(data: &'de [u8]) -> Result<T, String> {
+    cdr::deserialize(data).map_err(|e| format!("not the expected CDR message: {e}"))
+}
+
+/// A PoseStamped message's pose in `frame`.
+fn stamped_pose(data: &[u8], tree: &TfTree, frame: &str) -> Result<Pose, String> {
+    let msg: PoseStamped = decode(data)?;
+    let pose = pose_of(msg.pose.position, msg.pose.orientation)?;
+    if msg.header.frame_id == frame || msg.header.frame_id.is_empty() {
+        return Ok(pose);
+    }
+    let to_frame = tree.lookup(&msg.header.frame_id, frame).ok_or_else(|| {
+        format!(
+            "the pose is in frame `{}`, which the transform tree does not link to `{frame}`",
+            msg.header.frame_id
+        )
+    })?;
+    Ok(to_frame * pose)
+}
+
+/// Open or closed from the finger joints' summed position.
+fn gripper_state(state: &JointState, closed_below: f64) -> Result<Gripper, String> {
+    if state.name.len() != state.position.len() {
+        return Err(format!(
+            "{} joint names but {} positions",
+            state.name.len(),
+            state.position.len()
+        ));
+    }
+    let fingers: Vec<f64> = state
+        .name
+        .iter()
+        .zip(&state.position)
+        .filter(|(n, _)| n.contains("finger"))
+        .map(|(_, p)| *p)
+        .collect();
+    let positions = if fingers.is_empty() {
+        &state.position[..]
+    } else {
+        &fingers[..]
+    };
+    if positions.is_empty() {
+        return Err("the joint state names no joints".into());
+    }
+    let opening: f64 = positions.iter().sum();
+    if !opening.is_finite() {
+        return Err("a finger position is not finite".into());
+    }
+    Ok(if opening < closed_below {
+        Gripper::Closed
+    } else {
+        Gripper::Open
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Cursor;
+
+    fn stamp(t: f64) -> Time {
+        Time {
+            sec: t.floor() as i32,
+            nanosec: ((t - t.floor()) * 1e9) as u32,
+        }
+    }
+
+    fn header(t: f64, frame: &str) -> Header {
+        Header {
+            stamp: stamp(t),
+            frame_id: frame.into(),
+        }
+    }
+
+    fn v(x: f64, y: f64, z: f64) -> Vector3Msg {
+        Vector3Msg { x, y, z }
+    }
+
+    const IDENTITY: QuaternionMsg = QuaternionMsg {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        w: 1.0,
+    };
+
+    struct Bag {
+        writer: mcap::Writer<Cursor<Vec<u8>>>,
+        channels: BTreeMap<String, u16>,
+        sequence: u32,
+    }
+
+    impl Bag {
+        fn new() -> Bag {
+            Bag {
+                writer: mcap::Writer::new(Cursor::new(Vec::new())).unwrap(),
+                channels: BTreeMap::new(),
+                sequence: 0,
+            }
+        }
+
+        fn send<T: Serialize>(&mut self, topic: &str, schema: &str, t: f64, msg: &T) {
+            let writer = &mut self.writer;
+            let channel = *self.channels.entry(topic.into()).or_insert_with(|| {
+                let s = writer.add_schema(schema, "ros2msg", b"").unwrap();
+                writer
+                    .add_channel(s, topic, "cdr", &BTreeMap::new())
+                    .unwrap()
+            });
+            self.sequence += 1;
+            let data = cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite).unwrap();
+            self.writer
+                .write_to_known_channel(
+                    &mcap::records::MessageHeader {
+                        channel_id: channel,
+                        sequence: self.sequence,
+                        log_time: (t * 1e9) as u64,
+                        publish_time: (t * 1e9) as u64,
+                    },
+                    &data,
+                )
+                .unwrap();
+        }
+
+        fn finish(mut self) -> Vec<u8> {
+            self.writer.finish().unwrap();
+            self.writer.into_inner().into_inner()
+        }
+    }
+
+    fn joints(t: f64, opening: f64) -> JointState {
+        JointState {
+            header: header(t, ""),
+            name: vec![
+                "panda_joint1".into(),
+                "panda_finger_joint1".into(),
+                "panda_finger_joint2".into(),
+            ],
+            position: vec![0.3, opening / 2.0, opening / 2.0],
+            velocity: vec![],
+            effort: vec![],
+        }
+    }
+
+    /// A bag where the hand moves along x, closes at t = 0.5 and the part is seen through the
+    /// transform tree, in a camera frame mounted 1 m above the base.
+    fn bag() -> Vec<u8> {
+        let mut bag = Bag::new();
+        let tf = |t: f64, parent: &str, child: &str, p: Vector3Msg| TfMessage {
+            transforms: vec![TransformStamped {
+                header: header(t, parent),
+                child_frame_id: child.into(),
+                transform: TransformMsg {
+                    translation: p,
+                    rotation: IDENTITY,
+                },
+            }],
+        };
+        bag.send(
+            "/tf_static",
+            "tf2_msgs/msg/TFMessage",
+            0.0,
+            &tf(0.0, "base", "camera", v(0.0, 0.0, 1.0)),
+        );
+        for i in 0..=10 {
+            let t = i as f64 * 0.1;
+            bag.send(
+                "/joint_states",
+                "sensor_msgs/msg/JointState",
+                t,
+                &joints(t, if t < 0.5 { 0.08 } else { 0.04 }),
+            );
+            bag.send(
+                "/tf",
+                "tf2_msgs/msg/TFMessage",
+                t,
+                &tf(t, "camera", "part", v(0.4, 0.0, -0.8)),
+            );
+            let ee = PoseStamped {
+                header: header(t, "base"),
+                pose: PoseMsg {
+                    position: v(0.3 + t * 0.1, 0.0, 0.2),
+                    orientation: IDENTITY,
+                },
+            };
+            bag.send("/ee_pose", "geometry_msgs/msg/PoseStamped", t, &ee);
+        }
+        bag.finish()
+    }
+
+    fn topics() -> Ros2Topics {
+        Ros2Topics {
+            task: "pick".into(),
+            frame: "base".into(),
+            ee: PoseSource::parse("/ee_pose"),
+            objects: vec![("part".into(), PoseSource::parse("tf:part"))],
+            gripper: "/joint_states".into(),
+            closed_below: 0.075,
+        }
+    }
+
+    #[test]
+    fn a_bag_becomes_a_demonstration() {
+        let demo = import_ros2(&bag(), &topics()).unwrap();
+        assert_eq!(demo.len(), 11);
+        assert_eq!(demo.header.frame, "base");
+        assert!((demo.ee[10].translation.x - 0.4).abs() < 1e-12);
+        let part = &demo.objects[0];
+        assert_eq!(part.name, "part");
+        assert!(
+            (part.poses[3].translation.vector - k::nalgebra::Vector3::new(0.4, 0.0, 0.2)).norm()
+                < 1e-12
+        );
+        let closed: Vec<bool> = demo.gripper.iter().map(|g| *g == Gripper::Closed).collect();
+        assert_eq!(closed.iter().position(|c| *c), Some(5));
+        assert!(demo.detector.is_empty());
+    }
+
+    #[test]
+    fn missing_or_unlinked_streams_are_named() {
+        let mut t = topics();
+        t.gripper = "/gripper".into();
+        let e = import_ros2(&bag(), &t).unwrap_err().to_string();
+        assert!(e.contains("no frame") && e.contains("/joint_states"), "{e}");
+        let mut t = topics();
+        t.frame = "map".into();
+        let e = import_ros2(&bag(), &t).unwrap_err().to_string();
+        assert!(e.contains("/ee_pose") && e.contains("`map`"), "{e}");
+        let e = import_ros2(b"nonsense", &topics()).unwrap_err().to_string();
+        assert!(e.contains("MCAP"), "{e}");
+    }
+}

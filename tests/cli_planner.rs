@@ -1,0 +1,272 @@
+//! End-to-end tests of `akl robot` and `akl plan` through the binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn akl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the akl binary runs")
+}
+
+/// Runs from a directory without the repository, to show the robot is built in.
+fn akl_elsewhere(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(std::env::temp_dir())
+        .output()
+        .expect("the akl binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
+}
+
+/// A scratch directory unique to one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const READY: &str =
+    "0,-0.7853981633974483,0,-2.356194490192345,0,1.5707963267948966,0.7853981633974483";
+
+#[test]
+fn robot_info_lists_joints_limits_and_links() {
+    let o = akl_elsewhere(&["robot", "info"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("panda_joint7") && out.contains("-3.0718") && out.contains("capsule"),
+        "{out}"
+    );
+    let v = json(&akl(&["robot", "info", "--json"]));
+    assert_eq!(v["joints"].as_array().unwrap().len(), 7);
+    assert_eq!(v["tcp_link"], "panda_tcp");
+}
+
+#[test]
+fn fk_of_the_ready_pose_is_the_published_reference() {
+    let o = akl(&["robot", "fk", "--joints", READY]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("flange  [0.307, -0.000, 0.590]"),
+        "{}",
+        stdout(&o)
+    );
+    let v = json(&akl(&["robot", "fk", "--joints", READY, "--json"]));
+    let p = v["flange"]["p"].as_array().unwrap();
+    assert!((p[0].as_f64().unwrap() - 0.30689).abs() < 1e-5);
+    assert!((p[2].as_f64().unwrap() - 0.59028).abs() < 1e-5);
+}
+
+#[test]
+fn ik_returns_joints_whose_fk_is_the_pose() {
+    let v = json(&akl(&[
+        "robot",
+        "ik",
+        "--pose",
+        "0.45,0.25,0.2,1,0,0,0",
+        "--json",
+    ]));
+    let joints: Vec<String> = v["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap().to_string())
+        .collect();
+    let back = json(&akl(&[
+        "robot",
+        "fk",
+        "--joints",
+        &joints.join(","),
+        "--json",
+    ]));
+    let p = back["tcp"]["p"].as_array().unwrap();
+    let expected = [0.45, 0.25, 0.2];
+    for (got, want) in p.iter().zip(expected) {
+        assert!((got.as_f64().unwrap() - want).abs() < 1e-6);
+    }
+    let seeded = akl(&[
+        "robot",
+        "ik",
+        "--pose",
+        "0.45,0.25,0.2,1,0,0,0",
+        "--seed-joints",
+        READY,
+    ]);
+    assert!(seeded.status.success(), "{}", stderr(&seeded));
+}
+
+#[test]
+fn an_unreachable_pose_says_so_with_exit_code_1() {
+    let o = akl(&["robot", "ik", "--pose", "1.5,0,0.5,1,0,0,0"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("unreachable"), "{}", stderr(&o));
+}
+
+#[test]
+fn malformed_robot_input_is_bad_input() {
+    for (args, expected) in [
+        (
+            vec!["robot", "fk", "--joints", "0,0,0"],
+            "expected 7 joint values",
+        ),
+        (
+            vec!["robot", "fk", "--joints", "0,0,0,x,0,0,0"],
+            "`x` is not a finite number",
+        ),
+        (
+            vec!["robot", "fk", "--joints", "0,0,0,0,0,0,0"],
+            "outside its limits",
+        ),
+        (
+            vec!["robot", "ik", "--pose", "0.4,0,0.3,0,0,0,2"],
+            "not unit length",
+        ),
+        (
+            vec!["robot", "ik", "--pose", "0.4,0,0.3"],
+            "expected 7 numbers",
+        ),
+        (
+            vec!["robot", "info", "--robot", "no/such/robot"],
+            "no/such/robot/robot.toml",
+        ),
+    ] {
+        let o = akl(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(expected), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"));
+    }
+}
+
+#[test]
+fn another_robot_folder_is_loaded_at_run_time() {
+    let dir = scratch("robot");
+    let panda = concat!(env!("CARGO_MANIFEST_DIR"), "/robots/panda");
+    let toml = std::fs::read_to_string(format!("{panda}/robot.toml")).unwrap();
+    std::fs::write(
+        dir.join("robot.toml"),
+        toml.replace("name = \"panda\"", "name = \"numerical_panda\"")
+            .replace("solver = \"panda\"", "solver = \"dls\""),
+    )
+    .unwrap();
+    std::fs::copy(format!("{panda}/panda.urdf"), dir.join("panda.urdf")).unwrap();
+    let dir_arg = dir.to_str().unwrap();
+    let o = akl(&["robot", "info", "--robot", dir_arg]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("numerical_panda") && stdout(&o).contains("dls"));
+    let o = akl(&[
+        "robot",
+        "ik",
+        "--pose",
+        "0.45,0.25,0.2,1,0,0,0",
+        "--robot",
+        dir_arg,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn plan_prints_segments_and_writes_the_plan() {
+    let dir = scratch("plan");
+    let out = dir.join("plan.json");
+    let o = akl(&[
+        "plan",
+        "tasks/inspection.truth.json",
+        "--task",
+        "inspection",
+        "--seed",
+        "3",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for word in [
+        "free",
+        "approach",
+        "lift",
+        "line",
+        "retreat",
+        "planning (ms)",
+        "close on part",
+    ] {
+        assert!(text.contains(word), "{word}: {text}");
+    }
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(plan["akl_plan"], 1);
+    assert_eq!(plan["joint_names"].as_array().unwrap().len(), 7);
+    assert_eq!(plan["events"].as_array().unwrap().len(), 2);
+    let summary = json(&akl(&[
+        "plan",
+        "tasks/assembly.truth.json",
+        "--task",
+        "assembly",
+        "--json",
+    ]));
+    let kinds: Vec<&str> = summary["segments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    assert!(kinds.contains(&"line"), "{kinds:?}");
+    assert!(summary["duration"].as_f64().unwrap() > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
+    let o = akl(&["plan", "no/such/spec.json", "--task", "inspection"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no/such/spec.json"));
+    let o = akl(&["plan", "tasks/inspection.truth.json", "--task", "juggling"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("unknown task `juggling`"));
+    let o = akl(&[
+        "plan",
+        "tasks/inspection.truth.json",
+        "--task",
+        "pick_place",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("unknown reference object"),
+        "{}",
+        stderr(&o)
+    );
+
+    let dir = scratch("unplannable");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tasks/inspection.truth.json"
+    ))
+    .unwrap();
+    let far = text.replacen("\"p\": [0.0, 0.0, 0.14]", "\"p\": [2.0, 0.0, 0.14]", 1);
+    assert_ne!(far, text);
+    let spec = dir.join("far.json");
+    std::fs::write(&spec, far).unwrap();
+    let o = akl(&["plan", spec.to_str().unwrap(), "--task", "inspection"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("keyframe 3") && err.contains("unreachable"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
