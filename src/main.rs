@@ -7,6 +7,7 @@ mod answers;
 mod cli;
 mod commands;
 mod exit;
+mod progress;
 mod stop;
 mod table;
 

@@ -6,11 +6,13 @@
 
 use crate::error::ExecError;
 use crate::report::{BatchReport, TrialReport};
+use crate::trace::{write_trace, TraceInput, TRACE_RATE};
 use crate::trial::{run_trial, trial_world, ExecOptions, Setup, Timeline};
 use akl_planner::Robot;
 use akl_scene::{Task, World};
 use akl_tsr::TaskSpec;
 use rayon::prelude::*;
+use std::path::Path;
 use std::time::Instant;
 
 /// Which trials a batch runs.
@@ -105,6 +107,23 @@ impl<'a> Batch<'a> {
         let mut timeline = Timeline::new(rate);
         let report = self.trial(i, Some(&mut timeline));
         (report, timeline)
+    }
+
+    /// Runs again the trial of `report` (this batch's report) that a trace should show (see
+    /// [`trial_to_trace`]), recording it at [`TRACE_RATE`], and writes it as an MCAP trace to
+    /// `path`. Returns that trial's index.
+    pub fn write_trace(&self, report: &BatchReport, path: &Path) -> Result<usize, ExecError> {
+        let i = trial_to_trace(report).min(self.worlds.len() - 1);
+        let (trial, timeline) = self.record(i, TRACE_RATE);
+        let input = TraceInput {
+            robot: self.setup.robot,
+            world: &self.worlds[i],
+            spec: self.setup.spec,
+            report: &trial,
+            timeline: &timeline,
+        };
+        write_trace(path, &input)?;
+        Ok(i)
     }
 
     fn trial(&self, i: usize, timeline: Option<&mut Timeline>) -> TrialReport {

@@ -18,10 +18,10 @@ pub const REPORT_VERSION: u32 = 1;
 pub enum Cause {
     /// A keyframe's TSR has no pose the arm can reach.
     Unreachable,
-    /// The planner found no collision-free plan (no collision-free IK solution, budget
-    /// exhausted, a line it cannot follow).
+    /// The planner found no plan (budget exhausted, a line it cannot follow, a bad start).
     NoPlan,
-    /// The arm or the held object touched something the step does not manipulate.
+    /// The arm or the held object touched something the step does not manipulate, in the
+    /// simulation or, when every way to reach a keyframe would, already in planning.
     Collision,
     /// The gripper closed on nothing, or on another object than the planned one.
     GraspFailed,

@@ -91,10 +91,15 @@ impl Timeline {
     }
 }
 
-/// The cause a planning error counts under.
+/// The cause a planning error counts under: unreachable when no pose of a keyframe's TSR has
+/// an IK solution; collision when poses are reachable but every solution (or its approach)
+/// would make the arm or the held object touch something, which the planner finds before
+/// the simulation could; no plan for the rest (budget exhausted, a line that cannot be
+/// followed, a bad start).
 pub fn plan_cause(e: &PlanError) -> Cause {
     match e {
         PlanError::Unreachable { .. } => Cause::Unreachable,
+        PlanError::NoCollisionFreeIk { .. } => Cause::Collision,
         _ => Cause::NoPlan,
     }
 }

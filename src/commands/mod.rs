@@ -1,6 +1,8 @@
 //! One module per top-level command.
 
 mod calibrate;
+mod demo;
+mod execute;
 mod learn;
 mod plan;
 mod robot;
@@ -26,6 +28,8 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Score(args) => score::run(args),
         Command::Robot(cmd) => robot::run(cmd),
         Command::Plan(args) => plan::run(args),
+        Command::Execute(args) => execute::run(args),
+        Command::Demo(args) => demo::run(args),
     }
 }
 

@@ -8,13 +8,14 @@ use crate::stop::on_ctrl_c;
 use akl_learn::calibration::Calibration;
 use akl_learn::demo::{Answer, DialogueKind};
 use akl_learn::live::{LiveEnd, LiveStream};
-use akl_learn::okl::OklParams;
+use akl_learn::okl::{LearnError, OklParams};
 use akl_learn::recording::Recording;
 use akl_learn::session::TeachingSession;
 use akl_learn::teach::{session_header, stream_demo, Pace};
 use akl_learn::teacher::demonstrate;
 use akl_learn::{learn_spec, Demo, LearnOptions, Method};
 use akl_scene::{builtin, Task};
+use akl_tsr::TaskSpec;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -25,8 +26,9 @@ struct AnswerCounts {
     unknown: usize,
 }
 
+/// What a teaching session recorded and learned, as `akl teach` prints it.
 #[derive(Serialize)]
-struct Summary {
+pub(crate) struct Summary {
     recording: String,
     task: String,
     frames: usize,
@@ -45,30 +47,34 @@ pub fn run(args: TeachArgs) -> CliResult {
     let (calibration, label) = load_calibration(args.calibration.as_deref())?;
     let stop = on_ctrl_c();
     let (demo, recording, stopped, task) = match args.teacher {
-        Teacher::Sim => teach_simulated(&args, calibration, &label, stop)?,
+        Teacher::Sim => {
+            let name = args.task.as_deref().ok_or_else(|| {
+                CliError::input("--teacher sim needs --task (a built-in task or a task file)")
+            })?;
+            let teaching = SimulatedTeaching {
+                task: name,
+                profile: &args.profile,
+                seed: args.seed,
+                answers: args.answers.as_deref().unwrap_or("oracle"),
+                rate: args.rate,
+                realtime: args.realtime,
+                output: &args.output,
+            };
+            let (demo, recording, stopped, task) =
+                teach_simulated(&teaching, calibration, &label, Some(stop))?;
+            (demo, recording, stopped, Some(task))
+        }
         Teacher::Stdin => teach_live(&args, calibration, &label, stop)?,
     };
     let spec_path = args.output.with_extension("spec.json");
-    let options = LearnOptions {
-        okl: OklParams::for_calibration(&calibration),
-        ..LearnOptions::default()
-    };
-    let learned = learn_spec(
-        Method::Akl,
+    let (summary, learned) = learn_and_save(
         &demo,
-        task.as_ref().map(|t| &t.world),
-        &options,
-    );
-    let mut summary = summarize(&demo, &recording, stopped);
-    match &learned {
-        Ok(spec) => {
-            spec.save(&spec_path)
-                .map_err(|e| CliError::internal(format!("{}: {e}", spec_path.display())))?;
-            summary.spec = Some(spec_path.display().to_string());
-            summary.keyframes = Some(spec.keyframes.len());
-        }
-        Err(e) => summary.learn_error = Some(e.to_string()),
-    }
+        &recording,
+        stopped,
+        task.as_ref(),
+        &calibration,
+        &spec_path,
+    )?;
     if args.json {
         print_json(&summary)?;
     } else {
@@ -86,36 +92,78 @@ pub fn run(args: TeachArgs) -> CliResult {
     }
 }
 
+/// Learns a spec with AKL from a session's `demo` (recorded to `recording`), writes it to
+/// `spec_path` when learning succeeds, and summarizes the session.
+pub(crate) fn learn_and_save(
+    demo: &Demo,
+    recording: &Path,
+    stopped: bool,
+    task: Option<&Task>,
+    calibration: &Calibration,
+    spec_path: &Path,
+) -> Result<(Summary, Result<TaskSpec, LearnError>), CliError> {
+    let options = LearnOptions {
+        okl: OklParams::for_calibration(calibration),
+        ..LearnOptions::default()
+    };
+    let learned = learn_spec(Method::Akl, demo, task.map(|t| &t.world), &options);
+    let mut summary = summarize(demo, recording, stopped);
+    match &learned {
+        Ok(spec) => {
+            spec.save(spec_path)
+                .map_err(|e| CliError::internal(format!("{}: {e}", spec_path.display())))?;
+            summary.spec = Some(spec_path.display().to_string());
+            summary.keyframes = Some(spec.keyframes.len());
+        }
+        Err(e) => summary.learn_error = Some(e.to_string()),
+    }
+    Ok((summary, learned))
+}
+
+/// How the simulated teacher demonstrates, as `akl teach --teacher sim` and `akl demo` ask.
+pub(crate) struct SimulatedTeaching<'a> {
+    /// Task: a built-in name or a task file.
+    pub task: &'a str,
+    /// Teacher profile name.
+    pub profile: &'a str,
+    /// Seed of the teacher.
+    pub seed: u64,
+    /// Who answers (see `answer_source`).
+    pub answers: &'a str,
+    /// Recording rate in Hz, if not the profile's.
+    pub rate: Option<f64>,
+    /// Play in real time.
+    pub realtime: bool,
+    /// The recording's file.
+    pub output: &'a Path,
+}
+
 type Taught = (Demo, PathBuf, bool, Option<Task>);
 
-fn teach_simulated(
-    args: &TeachArgs,
+/// Records the simulated teacher's demonstration through a teaching session (the online
+/// detector asks, `t.answers` answers) under the calibration named `label`. Returns the
+/// demo, the recording's path, whether `stop` (set by Ctrl-C) ended it early, and the task.
+pub(crate) fn teach_simulated(
+    t: &SimulatedTeaching,
     calibration: Calibration,
     label: &str,
-    stop: &'static std::sync::atomic::AtomicBool,
-) -> Result<Taught, CliError> {
-    let name = args.task.as_deref().ok_or_else(|| {
-        CliError::input("--teacher sim needs --task (a built-in task or a task file)")
-    })?;
-    let task = builtin::resolve(name).map_err(CliError::input)?;
-    let mut profile = profile(&args.profile)?;
-    if let Some(rate) = args.rate {
+    stop: Option<&'static std::sync::atomic::AtomicBool>,
+) -> Result<(Demo, PathBuf, bool, Task), CliError> {
+    let task = builtin::resolve(t.task).map_err(CliError::input)?;
+    let mut profile = profile(t.profile)?;
+    if let Some(rate) = t.rate {
         profile.rate = rate;
     }
-    let sim = demonstrate(&task, &task.world, &profile, args.seed)
-        .map_err(|e| CliError::input(format!("task `{name}`: {e}")))?;
-    let mut answers = answer_source(
-        args.answers.as_deref().unwrap_or("oracle"),
-        Some((&sim, &profile, args.seed)),
-    )?;
+    let sim = demonstrate(&task, &task.world, &profile, t.seed)
+        .map_err(|e| CliError::input(format!("task `{}`: {e}", t.task)))?;
+    let mut answers = answer_source(t.answers, Some((&sim, &profile, t.seed)))?;
     let header = session_header(&sim.demo.header, Some(label));
     let names: Vec<String> = sim.demo.objects.iter().map(|o| o.name.clone()).collect();
-    let mut recording =
-        Recording::create(&args.output, &header, &names).map_err(CliError::input)?;
+    let mut recording = Recording::create(t.output, &header, &names).map_err(CliError::input)?;
     let partial = recording.partial_path().to_path_buf();
     let pace = Pace {
-        realtime: args.realtime,
-        stop: Some(stop),
+        realtime: t.realtime,
+        stop,
     };
     let (demo, stopped) = stream_demo(
         &sim.demo,
@@ -128,7 +176,7 @@ fn teach_simulated(
     )
     .map_err(|e| kept_partial(&partial, e))?;
     let path = recording.finish().map_err(CliError::internal)?;
-    Ok((demo, path, stopped, Some(task)))
+    Ok((demo, path, stopped, task))
 }
 
 fn teach_live(
@@ -200,7 +248,14 @@ fn summarize(demo: &Demo, recording: &Path, stopped: bool) -> Summary {
     }
 }
 
+/// Prints a session's summary.
 fn print_summary(s: &Summary) {
+    print_recorded(s);
+    print_learned(s);
+}
+
+/// Prints what a session recorded: frames and dialogue.
+pub(crate) fn print_recorded(s: &Summary) {
     println!(
         "recorded {}: task `{}`, {} frames, {:.1} s{}",
         s.recording,
@@ -217,6 +272,10 @@ fn print_summary(s: &Summary) {
         "  dialogue: {} queries (yes {}, no {}, I don't know {}), {} suggestions, {} keyframe marks",
         s.queries, s.answers.yes, s.answers.no, s.answers.unknown, s.suggestions, s.keyframe_marks
     );
+}
+
+/// Prints what was learned from a session's recording.
+pub(crate) fn print_learned(s: &Summary) {
     match (&s.spec, &s.learn_error) {
         (Some(spec), _) => println!(
             "  learned with AKL: {} keyframes, written to {spec}",

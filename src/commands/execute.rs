@@ -1,0 +1,239 @@
+//! `akl execute SPEC --task T`, and the execution stage of `akl demo`.
+
+use super::print_json;
+use super::robot::load as load_robot;
+use crate::cli::ExecuteArgs;
+use crate::exit::{CliError, CliResult};
+use crate::progress::Progress;
+use crate::table::Table;
+use akl_exec::batch::{Batch, BatchOptions};
+use akl_exec::error::ExecError;
+use akl_exec::report::{BatchReport, Cause};
+use akl_exec::trial::ExecOptions;
+use akl_planner::Robot;
+use akl_scene::{builtin, Task};
+use akl_tsr::{FileError, TaskSpec};
+use serde::Serialize;
+use std::path::Path;
+
+/// How many failed trials the table lists one by one.
+const LISTED_FAILURES: usize = 10;
+
+/// One execution: a spec on a task, the trials, and where the outputs go.
+pub(crate) struct Execution<'a> {
+    /// The robot.
+    pub robot: &'a Robot,
+    /// The task.
+    pub task: &'a Task,
+    /// The spec.
+    pub spec: &'a TaskSpec,
+    /// The spec's file, to name it in messages.
+    pub spec_path: &'a Path,
+    /// Randomized trials, or `None` for one trial with the task's own placements.
+    pub randomize: Option<usize>,
+    /// Seed of the first trial.
+    pub seed: u64,
+    /// Trials in parallel (`None`: the number of cores).
+    pub jobs: Option<usize>,
+    /// Where to write the trace.
+    pub trace: Option<&'a Path>,
+    /// Where to write the report.
+    pub report: Option<&'a Path>,
+}
+
+/// The outcome of an execution, as `--json` prints it.
+#[derive(Serialize)]
+pub(crate) struct Executed {
+    /// The spec file.
+    pub spec: String,
+    /// The report file written, if any.
+    pub report_file: Option<String>,
+    /// The trace file written, if any.
+    pub trace_file: Option<String>,
+    /// The trial the trace shows.
+    pub trace_trial: Option<usize>,
+    /// The report.
+    #[serde(flatten)]
+    pub report: BatchReport,
+}
+
+pub fn run(args: ExecuteArgs) -> CliResult {
+    let robot = load_robot(&args.robot)?;
+    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
+    let executed = execute(&Execution {
+        robot: &robot,
+        task: &task,
+        spec: &spec,
+        spec_path: &args.spec,
+        randomize: args.randomize,
+        seed: args.seed,
+        jobs: args.jobs,
+        trace: args.trace.as_deref(),
+        report: args.report.as_deref(),
+    })?;
+    if args.json {
+        print_json(&executed)?;
+    } else {
+        print_executed(&executed);
+        print_outputs(&executed);
+    }
+    verdict(&executed.report)
+}
+
+/// Exit code 1 when some trial failed.
+pub(crate) fn verdict(report: &BatchReport) -> CliResult {
+    if report.all_passed() {
+        Ok(())
+    } else {
+        Err(CliError::internal(format!(
+            "{} of {} trials failed",
+            report.trials - report.passed,
+            report.trials
+        )))
+    }
+}
+
+/// Checks that `path` can be created: its folder exists.
+fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
+    let folder = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if path.file_name().is_none() || !folder.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: cannot write the {what} there (no such folder)",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Runs the trials of `e`, showing progress, and writes the report and trace.
+pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
+    if let Some(p) = e.trace {
+        check_output(p, "trace")?;
+    }
+    if let Some(p) = e.report {
+        check_output(p, "report")?;
+    }
+    let trials = match e.randomize {
+        Some(0) => return Err(CliError::input("--randomize: needs at least one trial")),
+        Some(n) => n,
+        None => 1,
+    };
+    let jobs = match e.jobs {
+        Some(0) => return Err(CliError::input("--jobs: needs at least one")),
+        Some(j) => j,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let options = BatchOptions {
+        trials,
+        randomize: e.randomize.is_some(),
+        seed: e.seed,
+        jobs: jobs.min(trials),
+    };
+    let exec = ExecOptions::default();
+    let batch = Batch::new(e.robot, e.task, e.spec, &exec, options).map_err(|err| match err {
+        ExecError::Spec(source) => CliError::input(FileError {
+            path: e.spec_path.to_path_buf(),
+            source,
+        }),
+        ExecError::Scene(source) => CliError::input(format!("task `{}`: {source}", e.task.name)),
+        other => CliError::input(other),
+    })?;
+    let progress = Progress::new(&format!("executing on `{}`", e.task.name), trials);
+    let report = batch
+        .run(&|r| progress.tick(r.passed))
+        .map_err(CliError::internal);
+    progress.finish();
+    let report = report?;
+    let written = |p: Option<&Path>| p.map(|p| p.display().to_string());
+    if let Some(p) = e.report {
+        report
+            .save(p)
+            .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
+    }
+    let trace_trial = match e.trace {
+        Some(p) => Some(batch.write_trace(&report, p).map_err(CliError::internal)?),
+        None => None,
+    };
+    Ok(Executed {
+        spec: e.spec_path.display().to_string(),
+        report_file: written(e.report),
+        trace_file: written(e.trace),
+        trace_trial,
+        report,
+    })
+}
+
+fn millimetres(metres: Option<f64>) -> String {
+    metres.map_or_else(|| "- (no lines)".into(), |m| format!("{:.3} mm", m * 1e3))
+}
+
+/// Prints the summary table and the failed trials.
+pub(crate) fn print_executed(x: &Executed) {
+    let r = &x.report;
+    let placement = if r.randomized {
+        format!("{} randomized trials (seeds {}..)", r.trials, r.seed)
+    } else {
+        format!("{} trial(s) with the task's placements", r.trials)
+    };
+    println!(
+        "{}: {} spec on task `{}`, {placement}, {} in parallel",
+        x.spec, r.method, r.task, r.jobs
+    );
+    let trials = r.trials.to_string();
+    let mut table = Table::new(["trials", &trials]);
+    let mut row = |a: &str, b: String| table.row(vec![a.to_string(), b]);
+    row("passed", r.passed.to_string());
+    for cause in Cause::ALL {
+        let n = r.failures.get(&cause).copied().unwrap_or(0);
+        row(&format!("failed: {cause}"), n.to_string());
+    }
+    row("worst line deviation", millimetres(r.worst_line_deviation));
+    row(
+        "time per trial",
+        format!(
+            "{:.3} s (planning {:.3} s, simulation {:.3} s)",
+            r.seconds_per_trial, r.plan_seconds_per_trial, r.sim_seconds_per_trial
+        ),
+    );
+    row(
+        "wall time",
+        format!(
+            "{:.2} s ({:.1} trials/s)",
+            r.wall_seconds,
+            r.trials as f64 / r.wall_seconds.max(1e-9)
+        ),
+    );
+    print!("{}", table.render());
+    let failed: Vec<_> = r.reports.iter().filter(|t| !t.passed).collect();
+    if !failed.is_empty() {
+        println!("failed trials:");
+        for t in failed.iter().take(LISTED_FAILURES) {
+            let first = t
+                .failures
+                .first()
+                .map_or(String::new(), |f| format!("{}: {}", f.cause, f.detail));
+            let more = match t.failures.len() {
+                0 | 1 => String::new(),
+                n => format!(" (and {} more)", n - 1),
+            };
+            println!("  trial {} (seed {}): {first}{more}", t.trial, t.seed);
+        }
+        if failed.len() > LISTED_FAILURES {
+            println!("  ... {} more", failed.len() - LISTED_FAILURES);
+        }
+    }
+}
+
+/// Prints where the report and trace went.
+fn print_outputs(x: &Executed) {
+    if let Some(f) = &x.report_file {
+        println!("report: {f}");
+    }
+    if let (Some(f), Some(i)) = (&x.trace_file, x.trace_trial) {
+        println!("trace of trial {i}: {f}");
+    }
+}
