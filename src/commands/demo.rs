@@ -12,6 +12,7 @@ use crate::exit::{CliError, CliResult};
 use crate::table::Table;
 use akl_learn::calibration::Calibration;
 use akl_learn::measures::{score, Tolerance};
+use akl_scene::builtin;
 
 pub fn run(args: DemoArgs) -> CliResult {
     if args.trials == 0 {
@@ -26,6 +27,7 @@ pub fn run(args: DemoArgs) -> CliResult {
             args.out.display()
         )));
     }
+    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
     let robot = load_robot(&RobotArg { robot: None })?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::input(format!("{}: {e}", args.out.display())))?;
@@ -36,7 +38,7 @@ pub fn run(args: DemoArgs) -> CliResult {
 
     let calibration = Calibration::default();
     let teaching = SimulatedTeaching {
-        task: &args.task,
+        task: &task,
         profile: "default",
         seed: args.seed,
         answers: "oracle",
@@ -44,8 +46,7 @@ pub fn run(args: DemoArgs) -> CliResult {
         realtime: false,
         output: &demo_path,
     };
-    let (demo, recording, stopped, task) =
-        teach_simulated(&teaching, calibration, "default", None)?;
+    let (demo, recording, stopped) = teach_simulated(&teaching, calibration, "default", None)?;
     let (summary, learned) = learn_and_save(
         &demo,
         &recording,

@@ -51,8 +51,9 @@ pub fn run(args: TeachArgs) -> CliResult {
             let name = args.task.as_deref().ok_or_else(|| {
                 CliError::input("--teacher sim needs --task (a built-in task or a task file)")
             })?;
+            let task = builtin::resolve(name).map_err(CliError::input)?;
             let teaching = SimulatedTeaching {
-                task: name,
+                task: &task,
                 profile: &args.profile,
                 seed: args.seed,
                 answers: args.answers.as_deref().unwrap_or("oracle"),
@@ -60,7 +61,7 @@ pub fn run(args: TeachArgs) -> CliResult {
                 realtime: args.realtime,
                 output: &args.output,
             };
-            let (demo, recording, stopped, task) =
+            let (demo, recording, stopped) =
                 teach_simulated(&teaching, calibration, &label, Some(stop))?;
             (demo, recording, stopped, Some(task))
         }
@@ -122,8 +123,8 @@ pub(crate) fn learn_and_save(
 
 /// How the simulated teacher demonstrates, as `akl teach --teacher sim` and `akl demo` ask.
 pub(crate) struct SimulatedTeaching<'a> {
-    /// Task: a built-in name or a task file.
-    pub task: &'a str,
+    /// The task demonstrated.
+    pub task: &'a Task,
     /// Teacher profile name.
     pub profile: &'a str,
     /// Seed of the teacher.
@@ -142,20 +143,19 @@ type Taught = (Demo, PathBuf, bool, Option<Task>);
 
 /// Records the simulated teacher's demonstration through a teaching session (the online
 /// detector asks, `t.answers` answers) under the calibration named `label`. Returns the
-/// demo, the recording's path, whether `stop` (set by Ctrl-C) ended it early, and the task.
+/// demo, the recording's path, and whether `stop` (set by Ctrl-C) ended it early.
 pub(crate) fn teach_simulated(
     t: &SimulatedTeaching,
     calibration: Calibration,
     label: &str,
     stop: Option<&'static std::sync::atomic::AtomicBool>,
-) -> Result<(Demo, PathBuf, bool, Task), CliError> {
-    let task = builtin::resolve(t.task).map_err(CliError::input)?;
+) -> Result<(Demo, PathBuf, bool), CliError> {
     let mut profile = profile(t.profile)?;
     if let Some(rate) = t.rate {
         profile.rate = rate;
     }
-    let sim = demonstrate(&task, &task.world, &profile, t.seed)
-        .map_err(|e| CliError::input(format!("task `{}`: {e}", t.task)))?;
+    let sim = demonstrate(t.task, &t.task.world, &profile, t.seed)
+        .map_err(|e| CliError::input(format!("task `{}`: {e}", t.task.name)))?;
     let mut answers = answer_source(t.answers, Some((&sim, &profile, t.seed)))?;
     let header = session_header(&sim.demo.header, Some(label));
     let names: Vec<String> = sim.demo.objects.iter().map(|o| o.name.clone()).collect();
@@ -176,7 +176,7 @@ pub(crate) fn teach_simulated(
     )
     .map_err(|e| kept_partial(&partial, e))?;
     let path = recording.finish().map_err(CliError::internal)?;
-    Ok((demo, path, stopped, task))
+    Ok((demo, path, stopped))
 }
 
 fn teach_live(

@@ -1,0 +1,458 @@
+//! End-to-end tests of `akl execute` and `akl demo` through the binary: ground truths pass
+//! randomized trials, reports are reproducible, bad input exits 2, failing trials exit 1, and
+//! the demo writes its four files. The full figures (100 trials per spec) are an ignored test.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const TASKS: [&str; 3] = ["pick_place", "inspection", "assembly"];
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+fn akl_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the akl binary runs")
+}
+
+fn akl(args: &[&str]) -> Output {
+    akl_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o.stdout)))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn truth(task: &str) -> String {
+    format!("tasks/{task}.truth.json")
+}
+
+/// The report without what depends on the machine (times, threads).
+fn without_timing(mut report: serde_json::Value) -> serde_json::Value {
+    let top = report.as_object_mut().unwrap();
+    for key in [
+        "seconds_per_trial",
+        "plan_seconds_per_trial",
+        "sim_seconds_per_trial",
+        "wall_seconds",
+        "jobs",
+    ] {
+        assert!(top.remove(key).is_some(), "the report has {key}");
+    }
+    for trial in top["reports"].as_array_mut().unwrap() {
+        let trial = trial.as_object_mut().unwrap();
+        trial.remove("plan_seconds").unwrap();
+        trial.remove("sim_seconds").unwrap();
+    }
+    report
+}
+
+#[test]
+fn every_ground_truth_passes_randomized_trials() {
+    for task in TASKS {
+        let o = akl(&[
+            "execute",
+            &truth(task),
+            "--task",
+            task,
+            "--randomize",
+            "3",
+            "--seed",
+            "40",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{task}: {}", text(&o.stdout));
+        assert!(
+            !text(&o.stderr).contains('\r'),
+            "no progress bar off a terminal"
+        );
+        let r = json(&o);
+        assert_eq!(
+            (r["trials"].as_u64(), r["passed"].as_u64()),
+            (Some(3), Some(3))
+        );
+        assert_eq!(r["randomized"], true);
+        let seeds: Vec<u64> = r["reports"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["seed"].as_u64().unwrap())
+            .collect();
+        assert_eq!(seeds, [40, 41, 42]);
+        let placements: Vec<String> = r["reports"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["placements"].to_string())
+            .collect();
+        assert!(
+            placements[0] != placements[1] && placements[1] != placements[2],
+            "every trial moves the objects: {placements:?}"
+        );
+        if task != "pick_place" {
+            let worst = r["worst_line_deviation"].as_f64().unwrap();
+            assert!(worst < 0.005, "{task}: {worst}");
+        }
+    }
+}
+
+#[test]
+fn the_table_counts_failures_by_cause_and_a_failed_trial_exits_1() {
+    let dir = scratch("execute-fail");
+    let spec =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection")))
+            .unwrap();
+    let mut far: serde_json::Value = serde_json::from_str(&spec).unwrap();
+    far["keyframes"][1]["tsr"]["tw_e"]["p"][0] = serde_json::json!(1.6);
+    std::fs::write(dir.join("far.json"), far.to_string()).unwrap();
+    let o = akl_in(
+        &dir,
+        &[
+            "execute",
+            "far.json",
+            "--task",
+            "inspection",
+            "--randomize",
+            "2",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    for row in [
+        "trials                   2",
+        "passed                   0",
+        "failed: unreachable      2",
+        "failed: collision        0",
+        "failed: line deviation   0",
+        "failed: goal not met     0",
+        "worst line deviation",
+        "time per trial",
+        "trial 0 (seed 0): unreachable: keyframe 1",
+    ] {
+        assert!(out.contains(row), "no `{row}` in\n{out}");
+    }
+    assert!(text(&o.stderr).contains("2 of 2 trials failed"));
+}
+
+#[test]
+fn same_spec_task_and_seed_give_the_same_report() {
+    let run = |seed: &str, jobs: &str| {
+        let o = akl(&[
+            "execute",
+            &truth("assembly"),
+            "--task",
+            "assembly",
+            "--randomize",
+            "2",
+            "--seed",
+            seed,
+            "--jobs",
+            jobs,
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", text(&o.stdout));
+        without_timing(json(&o))
+    };
+    let one = run("5", "1");
+    assert_eq!(one, run("5", "2"));
+    let other = run("6", "1");
+    assert_eq!(
+        one["reports"][1]["placements"],
+        other["reports"][0]["placements"]
+    );
+    assert_ne!(
+        one["reports"][0]["placements"],
+        other["reports"][0]["placements"]
+    );
+}
+
+#[test]
+fn execute_writes_its_report_and_trace() {
+    let dir = scratch("execute-files");
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection"));
+    let o = akl_in(
+        &dir,
+        &[
+            "execute",
+            spec.to_str().unwrap(),
+            "--task",
+            "inspection",
+            "--trace",
+            "trace.mcap",
+            "--report",
+            "report.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("1 trial(s) with the task's placements"),
+        "{out}"
+    );
+    assert!(out.contains("trace of trial 0: trace.mcap"), "{out}");
+    let trace = std::fs::read(dir.join("trace.mcap")).unwrap();
+    assert!(trace.starts_with(MCAP_MAGIC) && trace.ends_with(MCAP_MAGIC));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["akl_report"], 1);
+    assert_eq!(report["randomized"], false);
+    assert_eq!(report["reports"][0]["passed"], true);
+}
+
+#[test]
+fn bad_input_exits_2_and_writes_nothing() {
+    let dir = scratch("execute-bad");
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection"));
+    let spec = spec.to_str().unwrap();
+    std::fs::write(dir.join("broken.json"), "{\"akl_spec\": 1, \"keyf").unwrap();
+    let cases: [(&[&str], &str); 8] = [
+        (
+            &["execute", "missing.json", "--task", "inspection"],
+            "missing.json",
+        ),
+        (
+            &["execute", "broken.json", "--task", "inspection"],
+            "broken.json",
+        ),
+        (&["execute", spec, "--task", "kitchen"], "kitchen"),
+        (&["execute", spec, "--task", "pick_place"], "part"),
+        (
+            &["execute", spec, "--task", "inspection", "--randomize", "0"],
+            "--randomize",
+        ),
+        (
+            &["execute", spec, "--task", "inspection", "--jobs", "0"],
+            "--jobs",
+        ),
+        (
+            &[
+                "execute",
+                spec,
+                "--task",
+                "inspection",
+                "--trace",
+                "no/such/trace.mcap",
+            ],
+            "no such folder",
+        ),
+        (&["demo", "--trials", "0", "--out", "out"], "--trials"),
+    ];
+    for (args, named) in cases {
+        let o = akl_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
+        let err = text(&o.stderr);
+        assert!(
+            err.starts_with("error: ") && err.contains(named),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let o = akl_in(&dir, &["demo", "--task", "kitchen", "--out", "out"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let mut left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["broken.json"]);
+}
+
+/// Runs `akl args` with its standard error on a new pseudo-terminal; returns what it wrote
+/// there and whether it succeeded.
+fn on_terminal(args: &[&str]) -> (String, bool) {
+    use std::io::Read;
+    use std::os::fd::{FromRawFd, OwnedFd};
+    let (mut master, mut slave) = (0, 0);
+    // SAFETY: openpty writes two new file descriptors into the pointers given.
+    let rc = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0, "openpty failed");
+    // SAFETY: both descriptors were just opened and are owned by nobody else.
+    let (mut master, slave) =
+        unsafe { (std::fs::File::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) };
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
+    cmd.args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stderr(slave);
+    let o = cmd.output().expect("the akl binary runs");
+    drop(cmd);
+    let mut written = Vec::new();
+    let mut buf = [0u8; 4096];
+    // Once the last slave descriptor is closed, reading the master ends with EIO.
+    while let Ok(n) = master.read(&mut buf) {
+        if n == 0 {
+            break;
+        }
+        written.extend_from_slice(&buf[..n]);
+    }
+    (text(&written), o.status.success())
+}
+
+#[test]
+fn a_progress_bar_is_drawn_on_a_terminal() {
+    let (err, ok) = on_terminal(&[
+        "execute",
+        &truth("inspection"),
+        "--task",
+        "inspection",
+        "--randomize",
+        "2",
+        "--jobs",
+        "1",
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.contains("executing on `inspection` ["), "{err:?}");
+    assert!(err.contains("0/2 trials") && err.contains("2/2 trials, 0 failed"), "{err:?}");
+    assert!(err.ends_with("\r\x1b[2K"), "the bar is erased at the end: {err:?}");
+}
+
+#[test]
+fn help_explains_the_checks_and_exit_codes() {
+    let o = akl(&["execute", "--help"]);
+    assert!(o.status.success());
+    let help = text(&o.stdout);
+    for word in [
+        "--randomize",
+        "--trace",
+        "--jobs",
+        "5 mm",
+        "Exit codes",
+        "goal",
+    ] {
+        assert!(help.contains(word), "no `{word}` in\n{help}");
+    }
+    let help = text(&akl(&["demo", "--help"]).stdout);
+    for word in [
+        "akl-out",
+        "demo.mcap",
+        "spec.json",
+        "report.json",
+        "trace.mcap",
+    ] {
+        assert!(help.contains(word), "no `{word}` in\n{help}");
+    }
+}
+
+#[test]
+fn demo_teaches_learns_executes_and_writes_four_files() {
+    let dir = scratch("demo");
+    let o = akl_in(
+        &dir,
+        &[
+            "demo",
+            "--task",
+            "inspection",
+            "--trials",
+            "2",
+            "--seed",
+            "1",
+        ],
+    );
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        text(&o.stdout),
+        text(&o.stderr)
+    );
+    let out = text(&o.stdout);
+    for stage in [
+        "1. teach",
+        "2. learn",
+        "the learned spec equals the task's ground truth",
+        "3. execute",
+        "passed                   2",
+    ] {
+        assert!(out.contains(stage), "no `{stage}` in\n{out}");
+    }
+    let folder = dir.join("akl-out");
+    for file in ["demo.mcap", "spec.json", "report.json", "trace.mcap"] {
+        assert!(out.contains(&format!("akl-out/{file}")), "{file} not named");
+        assert!(folder.join(file).is_file(), "{file} missing");
+    }
+    for mcap in ["demo.mcap", "trace.mcap"] {
+        assert!(std::fs::read(folder.join(mcap))
+            .unwrap()
+            .starts_with(MCAP_MAGIC));
+    }
+    let spec: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("spec.json")).unwrap()).unwrap();
+    assert_eq!(
+        (spec["akl_spec"].as_u64(), spec["method"].as_str()),
+        (Some(1), Some("akl"))
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        (report["trials"].as_u64(), report["passed"].as_u64()),
+        (Some(2), Some(2))
+    );
+    assert_eq!(report["seed"], 1);
+}
+
+/// Passes of 100 randomized trials (seeds 0..99) for each task's ground truth and for the
+/// spec `akl teach --teacher sim` learns (default profile, oracle answers, seed 0); each must
+/// pass at least 95. The figures in BENCHMARKS.md come from this test:
+///
+///     cargo test --release --test cli_execute -- --ignored --nocapture
+#[test]
+#[ignore = "runs 600 trials: under a minute in release, longer in debug"]
+fn figures_truth_and_learned_specs_pass_95_of_100() {
+    let dir = scratch("figures");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut short = Vec::new();
+    println!("task        spec     passed  failures                      s/trial");
+    for task in TASKS {
+        let demo = format!("{task}.mcap");
+        let o = akl_in(
+            &dir,
+            &["teach", "--task", task, "--teacher", "sim", "-o", &demo],
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let learned = dir.join(format!("{task}.spec.json"));
+        for (label, spec) in [("truth", root.join(truth(task))), ("learned", learned)] {
+            let o = akl_in(
+                &dir,
+                &[
+                    "execute",
+                    spec.to_str().unwrap(),
+                    "--task",
+                    task,
+                    "--randomize",
+                    "100",
+                    "--json",
+                ],
+            );
+            let r = json(&o);
+            let passed = r["passed"].as_u64().unwrap();
+            println!(
+                "{task:<11} {label:<8} {passed:>3}/100  {:<29} {:.3}",
+                r["failures"].to_string(),
+                r["seconds_per_trial"].as_f64().unwrap()
+            );
+            if passed < 95 {
+                short.push(format!("{task} {label}: {passed}/100"));
+            }
+        }
+    }
+    assert!(short.is_empty(), "below 95 of 100: {short:?}");
+}
