@@ -287,8 +287,12 @@ fn on_terminal(args: &[&str]) -> (String, bool) {
     };
     assert_eq!(rc, 0, "openpty failed");
     // SAFETY: both descriptors were just opened and are owned by nobody else.
-    let (mut master, slave) =
-        unsafe { (std::fs::File::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) };
+    let (mut master, slave) = unsafe {
+        (
+            std::fs::File::from_raw_fd(master),
+            OwnedFd::from_raw_fd(slave),
+        )
+    };
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
     cmd.args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
@@ -321,8 +325,14 @@ fn a_progress_bar_is_drawn_on_a_terminal() {
     ]);
     assert!(ok, "{err}");
     assert!(err.contains("executing on `inspection` ["), "{err:?}");
-    assert!(err.contains("0/2 trials") && err.contains("2/2 trials, 0 failed"), "{err:?}");
-    assert!(err.ends_with("\r\x1b[2K"), "the bar is erased at the end: {err:?}");
+    assert!(
+        err.contains("0/2 trials") && err.contains("2/2 trials, 0 failed"),
+        "{err:?}"
+    );
+    assert!(
+        err.ends_with("\r\x1b[2K"),
+        "the bar is erased at the end: {err:?}"
+    );
 }
 
 #[test]
