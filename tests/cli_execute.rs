@@ -217,7 +217,7 @@ fn bad_input_exits_2_and_writes_nothing() {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection"));
     let spec = spec.to_str().unwrap();
     std::fs::write(dir.join("broken.json"), "{\"akl_spec\": 1, \"keyf").unwrap();
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 9] = [
         (
             &["execute", "missing.json", "--task", "inspection"],
             "missing.json",
@@ -246,6 +246,10 @@ fn bad_input_exits_2_and_writes_nothing() {
                 "no/such/trace.mcap",
             ],
             "no such folder",
+        ),
+        (
+            &["execute", spec, "--task", "inspection", "--report", "."],
+            "is a folder",
         ),
         (&["demo", "--trials", "0", "--out", "out"], "--trials"),
     ];

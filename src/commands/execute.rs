@@ -94,8 +94,14 @@ pub(crate) fn verdict(report: &BatchReport) -> CliResult {
     }
 }
 
-/// Checks that `path` can be created: its folder exists.
+/// Checks that `path` can be written: its folder exists and it is not a folder itself.
 fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
+    if path.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: is a folder; give the {what} a file name",
+            path.display()
+        )));
+    }
     let folder = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
