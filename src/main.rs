@@ -9,6 +9,7 @@ mod commands;
 mod exit;
 mod stop;
 mod table;
+mod tty;
 
 use clap::Parser;
 use std::process::ExitCode;
