@@ -1,13 +1,13 @@
 //! Who answers the learner's questions, from the `--answers` option.
 
 use std::fs::{File, OpenOptions};
-use std::io::BufReader;
 
 use akl_learn::dialogue::{AllYes, AnswerSource, ListedAnswers, Terminal};
 use akl_learn::teach::oracle_for;
 use akl_learn::teacher::{SimulatedDemo, TeacherProfile};
 
 use crate::exit::CliError;
+use crate::tty::KeyReader;
 
 /// The terminal the questions are asked on: the controlling terminal, so that a demonstration
 /// can stream in on standard input at the same time.
@@ -37,7 +37,7 @@ pub fn answer_source(
             };
             let input = File::open(TTY).map_err(open)?;
             let output = OpenOptions::new().write(true).open(TTY).map_err(open)?;
-            Ok(Box::new(Terminal::new(BufReader::new(input), output)))
+            Ok(Box::new(Terminal::new(KeyReader::new(input), output)))
         }
         list => Ok(Box::new(ListedAnswers::parse(list).map_err(|e| {
             CliError::input(format!(

@@ -259,7 +259,7 @@ pub enum Teacher {
 #[command(
     after_help = "ANSWERS is `oracle` (a simulated teacher who knows the task's true \
 lines and errs at its profile's rate; --teacher sim only), `all-yes`, `terminal` (asked on \
-/dev/tty: y, n or ? then Enter), or a list such as `yes,no,unknown` used in order. Defaults: \
+/dev/tty: one key, y, n or ?), or a list such as `yes,no,unknown` used in order. Defaults: \
 oracle with --teacher sim, terminal with --teacher stdin.
 
 The recording streams into OUTPUT.partial and is renamed to OUTPUT when complete; a killed \

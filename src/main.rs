@@ -10,6 +10,7 @@ mod exit;
 mod progress;
 mod stop;
 mod table;
+mod tty;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -354,8 +354,9 @@ fn questions_are_answered_on_the_terminal() {
         seen.contains("[y] yes") && seen.contains("nearest:"),
         "{seen}"
     );
-    pty.master.write_all(b"maybe\n").unwrap();
-    pty.master.write_all(b"y\n").unwrap();
+    // A stray key asks again; one key answers, no Enter needed.
+    pty.master.write_all(b"x").unwrap();
+    pty.master.write_all(b"y").unwrap();
     feeder.join().unwrap().unwrap();
     let o = child.wait_with_output().unwrap();
     assert!(o.status.success(), "{}", text(&o.stderr));

@@ -1,6 +1,6 @@
 //! The learner's question, the teacher's answer sources, and the suggestion (thesis §3.3.1.2).
 
-use std::io::{BufRead, Write};
+use std::io::{Read, Write};
 
 use k::nalgebra::Vector3;
 use rand::Rng;
@@ -213,36 +213,60 @@ impl AnswerSource for Oracle {
     }
 }
 
-/// Asks a person: prints the grounded question and reads one key (y, n or ?) and Enter.
+/// Asks a person: prints the grounded question and takes one key per answer (y, n or ?).
+///
+/// Whitespace (such as an Enter pressed out of habit) is ignored and any other key asks again,
+/// so a stray keystroke never becomes an answer. The caller decides whether the terminal
+/// delivers keys at once (raw mode) or a line at a time.
 pub struct Terminal<R, W> {
     input: R,
     output: W,
 }
 
-impl<R: BufRead, W: Write> Terminal<R, W> {
+impl<R: Read, W: Write> Terminal<R, W> {
     /// Asks on `output` and reads answers from `input` (normally `/dev/tty`, so a demonstration
     /// can stream in on stdin at the same time).
     pub fn new(input: R, output: W) -> Self {
         Terminal { input, output }
     }
+
+    fn prompt(&mut self) -> std::io::Result<()> {
+        write!(self.output, "answer [y/n/?]: ")?;
+        self.output.flush()
+    }
 }
 
-impl<R: BufRead, W: Write> AnswerSource for Terminal<R, W> {
+/// The answer one key stands for.
+fn answer_for_key(key: u8) -> Option<Answer> {
+    match key.to_ascii_lowercase() {
+        b'y' => Some(Answer::Yes),
+        b'n' => Some(Answer::No),
+        b'?' | b'u' => Some(Answer::Unknown),
+        _ => None,
+    }
+}
+
+impl<R: Read, W: Write> AnswerSource for Terminal<R, W> {
     fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
         let io = |e: std::io::Error| DialogueError::Terminal(e.to_string());
         writeln!(self.output, "\n{}", question.describe()).map_err(io)?;
+        self.prompt().map_err(io)?;
+        let mut key = [0u8; 1];
         loop {
-            write!(self.output, "answer [y/n/?]: ").map_err(io)?;
-            self.output.flush().map_err(io)?;
-            let mut line = String::new();
-            if self.input.read_line(&mut line).map_err(io)? == 0 {
+            if self.input.read(&mut key).map_err(io)? == 0 {
                 return Err(DialogueError::Terminal(
                     "the terminal closed before an answer".into(),
                 ));
             }
-            if let Some(answer) = parse_answer(&line) {
+            if key[0].is_ascii_whitespace() {
+                continue;
+            }
+            if let Some(answer) = answer_for_key(key[0]) {
+                writeln!(self.output, "{}", key[0] as char).map_err(io)?;
                 return Ok(answer);
             }
+            writeln!(self.output).map_err(io)?;
+            self.prompt().map_err(io)?;
         }
     }
 }
@@ -290,7 +314,7 @@ mod tests {
     #[test]
     fn the_terminal_shows_a_grounded_question_and_takes_one_key() {
         let mut out = Vec::new();
-        let mut terminal = Terminal::new(&b"maybe\n?\n"[..], &mut out);
+        let mut terminal = Terminal::new(&b"x\n?\n"[..], &mut out);
         assert_eq!(terminal.answer(&question(3)), Ok(Answer::Unknown));
         let shown = String::from_utf8(out).unwrap();
         assert!(
@@ -298,5 +322,6 @@ mod tests {
             "{shown}"
         );
         assert!(shown.contains("(+0.00, -1.00, +0.00)"), "{shown}");
+        assert_eq!(shown.matches("answer [y/n/?]").count(), 2, "{shown}");
     }
 }
