@@ -94,6 +94,8 @@ pub struct RobotCollision {
     self_shared: Vec<usize>,
     /// For each body, how many leading joints its chain shares with the TCP's.
     tcp_shared: Vec<usize>,
+    /// The links turned by arm-driven revolute joints, with their axes in the link frame.
+    turned: Vec<(usize, Vector3<f64>)>,
 }
 
 /// The clearances kept (metres).
@@ -296,6 +298,13 @@ impl RobotCollision {
             .iter()
             .map(|c| shared(c, tcp_chain))
             .collect();
+        let mut turned: Vec<(usize, Vector3<f64>)> = chains
+            .iter()
+            .flatten()
+            .filter_map(|m| m.axis.map(|axis| (m.link, axis)))
+            .collect();
+        turned.sort_by_key(|(link, _)| *link);
+        turned.dedup_by_key(|(link, _)| *link);
         RobotCollision {
             bodies,
             self_pairs,
@@ -306,6 +315,7 @@ impl RobotCollision {
             offsets,
             self_shared,
             tcp_shared,
+            turned,
         }
     }
 
@@ -411,15 +421,18 @@ fn placed(body: &Body, link_pose: &Pose) -> Placed {
     Placed { pose, a, b }
 }
 
-/// Squared distance between the box around `p` grown by `r` and the box from `min` to `max`
-/// (0 when they overlap).
-fn box_gap_sq(p: &Placed, r: f64, min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
-    (0..3)
-        .map(|i| {
-            let gap = (p.a[i].min(p.b[i]) - r - max[i]).max(min[i] - p.a[i].max(p.b[i]) - r);
-            gap.max(0.0).powi(2)
-        })
-        .sum()
+/// The world-axis-aligned box around `p` grown by `r`: its lower and upper corners.
+fn bounding_box(p: &Placed, r: f64) -> [Vector3<f64>; 2] {
+    let grow = Vector3::repeat(r);
+    [p.a.inf(&p.b) - grow, p.a.sup(&p.b) + grow]
+}
+
+/// Squared distance between two world-axis-aligned boxes (0 when they overlap).
+fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
+    (a[0] - max)
+        .sup(&(min - a[1]))
+        .sup(&Vector3::zeros())
+        .norm_squared()
 }
 
 /// Squared distance between segments [p1, q1] and [p2, q2] (Ericson, Real-Time Collision
@@ -565,14 +578,16 @@ impl<'a> Checker<'a> {
         held: Option<&Held>,
         allow: &Allowances,
     ) -> Option<Hit> {
-        let within = q
-            .iter()
-            .zip(self.robot.joint_limits())
-            .all(|(v, [lo, hi])| *v >= *lo && *v <= *hi);
-        if !within {
+        if !self.within_limits(q) {
             return Some(Hit::Limits);
         }
         self.probe(q, width, held, allow, None).err()
+    }
+
+    fn within_limits(&self, q: &[f64]) -> bool {
+        q.iter()
+            .zip(self.robot.joint_limits())
+            .all(|(v, [lo, hi])| *v >= *lo && *v <= *hi)
     }
 
     /// Whether `q` is collision-free (see [`Checker::check`]).
@@ -596,6 +611,10 @@ impl<'a> Checker<'a> {
     ) {
         let model = self.model;
         let tcp = poses[model.tcp];
+        let mut axes = [Vector3::zeros(); MAX_LINKS];
+        for &(link, axis) in &model.turned {
+            axes[link] = poses[link].rotation * axis;
+        }
         for (k, chain) in model.chains.iter().enumerate() {
             let (centre, extent) = match (placed_bodies.get(k), model.bodies.get(k)) {
                 (Some(p), Some(b)) => (p.pose.translation.vector, b.half_segment + b.core_radius),
@@ -609,14 +628,12 @@ impl<'a> Checker<'a> {
             slots[chain.len()] = d;
             for (m, mover) in chain.iter().enumerate().rev() {
                 let turn = mover.scale.abs() * sweep.half[mover.index];
-                d += match mover.axis {
-                    Some(axis) => {
-                        let frame = &poses[mover.link];
-                        let axis = frame.rotation * axis;
-                        let r = (centre - frame.translation.vector).cross(&axis).norm() + extent;
-                        (r + d) * turn
-                    }
-                    None => turn,
+                d += if mover.axis.is_some() {
+                    let origin = poses[mover.link].translation.vector;
+                    let r = (centre - origin).cross(&axes[mover.link]).norm() + extent;
+                    (r + d) * turn
+                } else {
+                    turn
                 };
                 slots[m] = d;
             }
@@ -701,13 +718,19 @@ impl<'a> Checker<'a> {
                 let s = model.self_shared[p];
                 pr.moved(i, s) + pr.moved(j, s)
             });
-            if let Some(pr) = proof.as_mut().filter(|pr| !pr.settled(moved, self_slack)) {
+            let centres_sq = centres.norm_squared();
+            if let Some(pr) = proof.as_mut() {
+                // The distance of the bounding balls first, the segments' only if it matters.
+                let balls_gap = centres_sq.sqrt() - balls;
+                if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
+                    continue;
+                }
                 let gap = segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b).sqrt() - reach;
                 if gap > 0.0 {
                     pr.limit(moved, self_slack + gap);
                     continue;
                 }
-            } else if centres.norm_squared() > balls * balls
+            } else if centres_sq > balls * balls
                 || segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b) > reach * reach
             {
                 continue;
@@ -730,6 +753,7 @@ impl<'a> Checker<'a> {
                     Group::Hand => m.hand,
                 };
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
+            let bounds = bounding_box(p, b.world_radius);
             for (index, o) in self.scene.obstacles.iter().enumerate() {
                 if Some(index) == self.scene.mount && model.mount_links.contains(&b.link) {
                     continue;
@@ -738,7 +762,7 @@ impl<'a> Checker<'a> {
                     continue;
                 }
                 let motion = proof.as_mut().map(|pr| (pr, moved, slack));
-                if !clear_of(&b.world_shape, p, b.world_radius, o, motion) {
+                if !clear_of(&b.world_shape, p, &bounds, o, motion) {
                     return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 }
             }
@@ -755,12 +779,13 @@ impl<'a> Checker<'a> {
             let extent = h.radius - h.in_tcp.translation.vector.norm();
             let held_chain = bodies.len();
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(held_chain, 0));
+            let bounds = bounding_box(&ball, extent);
             for o in &self.scene.obstacles {
                 if allow.held_may_touch.contains(&o.name) {
                     continue;
                 }
                 let motion = proof.as_mut().map(|pr| (pr, moved, 0.5 * h.margin));
-                if !clear_of(&h.grown, &ball, extent, o, motion) {
+                if !clear_of(&h.grown, &ball, &bounds, o, motion) {
                     return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }
@@ -795,14 +820,14 @@ impl<'a> Checker<'a> {
     /// The first collision on the straight joint-space edge from `a` to `b` (endpoints
     /// included), or `None` if every clearance keeps at least half its margin all along it.
     ///
-    /// Both ends are checked, then the stretch between them: its midpoint is checked, and the
-    /// clearances found there prove a stretch about it free (see the module documentation:
-    /// no point moves further than its clearance plus half its margin, by the bound of
-    /// [`Checker::sweep_bound`] computed at the midpoint for the stretch). What is left on
-    /// either side is handled the same way, breadth first, so that checks spread over the
-    /// edge in bisection order and collisions are found early. Each check proves at least
-    /// half the smallest margin of motion, so the number of checks is at most about the
-    /// bound on how far points move divided by that.
+    /// Each check on the edge proves a stretch about it free: no point moves further than the
+    /// clearance found there plus half its margin, by the bound of [`Checker::sweep_bound`]
+    /// taken at the check for the stretch (see the module documentation). Both ends are
+    /// checked first, each proving a stretch into the edge; then the midpoint of what is left,
+    /// and so on breadth first on either side of what each check proved, so that checks
+    /// spread over the edge in bisection order and collisions are found early. Each check
+    /// proves at least half the smallest margin of motion, so the number of checks is at most
+    /// about the bound on how far points move divided by that.
     pub fn edge(
         &self,
         a: &[f64],
@@ -811,15 +836,26 @@ impl<'a> Checker<'a> {
         held: Option<&Held>,
         allow: &Allowances,
     ) -> Option<Hit> {
-        if let Some(hit) = self
-            .check(b, width, held, allow)
-            .or_else(|| self.check(a, width, held, allow))
-        {
-            return Some(hit);
+        if !self.within_limits(a) || !self.within_limits(b) {
+            return Some(Hit::Limits);
         }
         let mut sweep = Sweep::new(self.model, a.len());
+        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
+            *h = (y - x).abs();
+        }
+        // Each end proves a stretch into the edge (the bound covers the whole edge about it).
+        let mut ends = [0.0; 2];
+        for (end, q) in ends.iter_mut().zip([b, a]) {
+            match self.probe(q, width, held, allow, Some(&mut sweep)) {
+                Ok(fraction) => *end = fraction,
+                Err(hit) => return Some(hit),
+            }
+        }
+        let mut open = VecDeque::new();
+        if ends[0] + ends[1] < 1.0 {
+            open.push_back((ends[1], 1.0 - ends[0]));
+        }
         let mut q = vec![0.0; a.len()];
-        let mut open = VecDeque::from([(0.0f64, 1.0f64)]);
         while let Some((lo, hi)) = open.pop_front() {
             let mid = 0.5 * (lo + hi);
             let half = 0.5 * (hi - lo);
@@ -841,17 +877,17 @@ impl<'a> Checker<'a> {
     }
 }
 
-/// Whether `shape` at `placed.pose` (inside the box around `placed` grown by `radius`) is
+/// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
 /// clear of `o`; with a proof, moving up to `moved` with `slack` to spare, the clearance
 /// found also limits the fraction proved free.
 fn clear_of(
     shape: &SharedShape,
     placed: &Placed,
-    radius: f64,
+    bounds: &[Vector3<f64>; 2],
     o: &Obstacle,
     motion: Option<(&mut Proof, f64, f64)>,
 ) -> bool {
-    let gap_sq = box_gap_sq(placed, radius, &o.min, &o.max);
+    let gap_sq = box_gap_sq(bounds, &o.min, &o.max);
     match motion {
         None => gap_sq > 0.0 || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose),
         Some((pr, moved, slack)) => {
