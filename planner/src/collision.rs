@@ -414,6 +414,7 @@ struct Placed {
     b: Vector3<f64>,
 }
 
+#[inline(always)]
 fn placed(body: &Body, link_pose: &Pose) -> Placed {
     let pose = link_pose * body.local;
     let a = (pose * Point3::new(0.0, 0.0, -body.half_segment)).coords;
@@ -581,7 +582,7 @@ impl<'a> Checker<'a> {
         if !self.within_limits(q) {
             return Some(Hit::Limits);
         }
-        self.probe(q, width, held, allow, None).err()
+        self.probe::<false>(q, width, held, allow, None).err()
     }
 
     fn within_limits(&self, q: &[f64]) -> bool {
@@ -667,10 +668,11 @@ impl<'a> Checker<'a> {
             * 2.0
     }
 
-    /// The first collision of `q` (within the joint limits), or, when `sweep` holds the joint
-    /// motion of a stretch about `q`, the fraction of that stretch proved free (see the
-    /// module documentation).
-    fn probe(
+    /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
+    /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
+    /// proved free (see the module documentation). Plain checks are compiled without the
+    /// proof's work.
+    fn probe<const PROVE: bool>(
         &self,
         q: &[f64],
         width: f64,
@@ -695,7 +697,7 @@ impl<'a> Checker<'a> {
             *slot = placed(b, &poses[b.link]);
         }
         let placed_bodies = &placed_bodies[..nb];
-        let mut proof = sweep.map(|s| {
+        let mut proof = sweep.filter(|_| PROVE).map(|s| {
             self.sweep_bounds(&poses[..n], placed_bodies, held, s);
             Proof {
                 sweep: s,
@@ -761,8 +763,7 @@ impl<'a> Checker<'a> {
                 if b.group == Group::Hand && allow.hand_may_touch.contains(&o.name) {
                     continue;
                 }
-                let motion = proof.as_mut().map(|pr| (pr, moved, slack));
-                if !clear_of(&b.world_shape, p, &bounds, o, motion) {
+                if !clear_of(&b.world_shape, p, &bounds, o, proof.as_mut(), moved, slack) {
                     return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 }
             }
@@ -784,8 +785,8 @@ impl<'a> Checker<'a> {
                 if allow.held_may_touch.contains(&o.name) {
                     continue;
                 }
-                let motion = proof.as_mut().map(|pr| (pr, moved, 0.5 * h.margin));
-                if !clear_of(&h.grown, &ball, &bounds, o, motion) {
+                let slack = 0.5 * h.margin;
+                if !clear_of(&h.grown, &ball, &bounds, o, proof.as_mut(), moved, slack) {
                     return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }
@@ -846,7 +847,7 @@ impl<'a> Checker<'a> {
         // Each end proves a stretch into the edge (the bound covers the whole edge about it).
         let mut ends = [0.0; 2];
         for (end, q) in ends.iter_mut().zip([b, a]) {
-            match self.probe(q, width, held, allow, Some(&mut sweep)) {
+            match self.probe::<true>(q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => *end = fraction,
                 Err(hit) => return Some(hit),
             }
@@ -864,7 +865,7 @@ impl<'a> Checker<'a> {
                 sweep.half[i] = half * (b[i] - a[i]).abs();
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            let proved = match self.probe(&q, width, held, allow, Some(&mut sweep)) {
+            let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => half * fraction,
                 Err(hit) => return Some(hit),
             };
@@ -878,37 +879,39 @@ impl<'a> Checker<'a> {
 }
 
 /// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
-/// clear of `o`; with a proof, moving up to `moved` with `slack` to spare, the clearance
-/// found also limits the fraction proved free.
+/// clear of `o`; with a proof, for an element moving up to `moved` with `slack` to spare,
+/// the clearance found also limits the fraction proved free.
+#[inline(always)]
 fn clear_of(
     shape: &SharedShape,
     placed: &Placed,
     bounds: &[Vector3<f64>; 2],
     o: &Obstacle,
-    motion: Option<(&mut Proof, f64, f64)>,
+    proof: Option<&mut Proof>,
+    moved: f64,
+    slack: f64,
 ) -> bool {
+    let Some(pr) = proof else {
+        let overlap = (0..3).all(|i| bounds[0][i] <= o.max[i] && bounds[1][i] >= o.min[i]);
+        return !overlap || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    };
     let gap_sq = box_gap_sq(bounds, &o.min, &o.max);
-    match motion {
-        None => gap_sq > 0.0 || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose),
-        Some((pr, moved, slack)) => {
-            if gap_sq > 0.0 {
-                pr.limit(moved, slack + gap_sq.sqrt());
-                return true;
-            }
-            if pr.settled(moved, slack) {
-                return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
-            }
-            match parry_convert::distance(shape, &placed.pose, &o.shape, &o.pose) {
-                Some(d) if d > 0.0 => {
-                    pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
-                    true
-                }
-                Some(_) => false,
-                None => {
-                    pr.limit(moved, slack);
-                    !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose)
-                }
-            }
+    if gap_sq > 0.0 {
+        pr.limit(moved, slack + gap_sq.sqrt());
+        return true;
+    }
+    if pr.settled(moved, slack) {
+        return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    }
+    match parry_convert::distance(shape, &placed.pose, &o.shape, &o.pose) {
+        Some(d) if d > 0.0 => {
+            pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
+            true
+        }
+        Some(_) => false,
+        None => {
+            pr.limit(moved, slack);
+            !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose)
         }
     }
 }
