@@ -94,7 +94,7 @@ pub fn recheck(
             arm: f * c.arm_margin,
             hand: f * c.hand_margin,
             held: f * c.held_margin,
-            self_: 1e-9,
+            self_: f * c.self_margin,
         },
     );
     let mut found = Vec::new();

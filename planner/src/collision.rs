@@ -6,8 +6,17 @@
 //! world objects; two links are each grown by half of `self_margin` before being tested
 //! against each other. Link pairs in `allowed_pairs` are never tested, nor `mount_links`
 //! against the object under the robot base.
+//!
+//! Edges (straight joint-space segments, [`Checker::edge`]) are checked continuously in the
+//! following sense: every clearance keeps at least half its margin everywhere along an edge
+//! reported free. Each check on the edge proves a stretch around it free, as long as the
+//! stretch is short enough that no point moves further than the clearance found at the
+//! check plus half the margin. How far points move is bounded per collision element by
+//! [`Checker::sweep_bound`]: turning joint j by Δ moves a point at distance r from its axis by
+//! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
+//! joints beyond j move the point.
 
-use crate::fk::Kinematics;
+use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::parry_convert;
 use crate::robot::Robot;
@@ -15,6 +24,7 @@ use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
+use std::collections::VecDeque;
 use std::fmt;
 
 /// Most links a robot may have (link poses live on the stack during a check).
@@ -22,6 +32,10 @@ pub const MAX_LINKS: usize = 32;
 
 /// Most collision elements a robot may have (they are placed on the stack during a check).
 pub const MAX_BODIES: usize = 40;
+
+/// What parry's single-precision distances are trusted to (metres): clearances it reports
+/// are reduced by this much before they are relied on.
+const DISTANCE_TOLERANCE: f64 = 1e-5;
 
 /// Which margin a link's shapes get.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -43,23 +57,45 @@ struct Body {
     world_shape: SharedShape,
     /// Grown by half the self margin, for tests between links.
     self_shape: SharedShape,
-    /// Half the capsule's segment (0 for other shapes) and the radius of a ball around the
-    /// segment that holds the grown shape.
+    /// Half the capsule's segment (0 for other shapes), and the radii of balls around the
+    /// segment that hold the shape itself, the shape grown by the group's margin and the
+    /// shape grown by half the self margin.
     half_segment: f64,
+    core_radius: f64,
     world_radius: f64,
     self_radius: f64,
 }
 
-/// The robot's collision model: its shapes, the link pairs to test and the displacement
-/// bounds used to space checks along edges.
+/// A joint that moves a collision element when the arm moves: the link it turns or slides,
+/// the arm joint that drives it and by how much, and its axis in the link frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Mover {
+    link: usize,
+    index: usize,
+    scale: f64,
+    /// `None` for a prismatic joint.
+    axis: Option<Vector3<f64>>,
+}
+
+/// The robot's collision model: its shapes, the link pairs to test and the joint chains used
+/// to bound how far they move along edges.
 #[derive(Debug, Clone)]
 pub struct RobotCollision {
     bodies: Vec<Body>,
     self_pairs: Vec<(usize, usize)>,
     mount_links: Vec<usize>,
     margins: Margins,
-    reach: Reach,
     tcp: usize,
+    /// For each body, then for the TCP: the arm-driven joints from the base to its link.
+    chains: Vec<Vec<Mover>>,
+    /// Where each chain's motion bounds start in a [`Sweep`]'s `bounds`.
+    offsets: Vec<usize>,
+    /// For each self pair, how many leading joints of their chains the two bodies share.
+    self_shared: Vec<usize>,
+    /// For each body, how many leading joints its chain shares with the TCP's.
+    tcp_shared: Vec<usize>,
+    /// The links turned by arm-driven revolute joints, with their axes in the link frame.
+    turned: Vec<(usize, Vector3<f64>)>,
 }
 
 /// The clearances kept (metres).
@@ -73,20 +109,6 @@ pub struct Margins {
     pub held: f64,
     /// Between links.
     pub self_: f64,
-}
-
-/// For each arm joint, how far from its axis a point of each group can be (metres): moving
-/// joint j by Δ moves such a point by at most `radius·|Δ|` (or `|Δ|` for a prismatic joint).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Reach {
-    /// Arm-link shapes.
-    pub arm: Vec<f64>,
-    /// Hand-link shapes.
-    pub hand: Vec<f64>,
-    /// The TCP origin (a held object adds its own extent).
-    pub tcp: Vec<f64>,
-    /// Whether each joint is prismatic.
-    pub prismatic: Vec<bool>,
 }
 
 /// A scene object prepared for checking.
@@ -110,6 +132,9 @@ pub struct Held {
     pub in_tcp: Pose,
     grown: SharedShape,
     local: Pose,
+    margin: f64,
+    /// Radius of a ball about the object's centre that holds the object itself.
+    core: f64,
     radius: f64,
 }
 
@@ -158,8 +183,41 @@ impl Allowances {
     }
 }
 
+/// The arm-driven joints between the base and `link`, base first.
+fn chain_to(kin: &Kinematics, link: usize) -> Vec<Mover> {
+    let links = kin.links();
+    let mut chain = Vec::new();
+    let mut at = Some(link);
+    while let Some(i) = at {
+        let (axis, drive) = match links[i].motion {
+            Motion::Revolute { axis, drive } => (Some(axis.into_inner()), drive),
+            Motion::Prismatic { drive, .. } => (None, drive),
+            Motion::Fixed => (None, Drive::Constant(0.0)),
+        };
+        if let Drive::Arm { index, scale, .. } = drive {
+            chain.push(Mover {
+                link: i,
+                index,
+                scale,
+                axis,
+            });
+        }
+        at = links[i].parent;
+    }
+    chain.reverse();
+    chain
+}
+
+/// How many leading joints two chains share.
+fn shared(a: &[Mover], b: &[Mover]) -> usize {
+    a.iter()
+        .zip(b)
+        .take_while(|(x, y)| x.link == y.link)
+        .count()
+}
+
 impl RobotCollision {
-    /// Prepares the robot's shapes, self-collision pairs and reach bounds with the margins of
+    /// Prepares the robot's shapes, self-collision pairs and joint chains with the margins of
     /// its `robot.toml`.
     pub fn new(robot: &Robot) -> RobotCollision {
         let c = &robot.config().collision;
@@ -199,6 +257,7 @@ impl RobotCollision {
                     world_shape,
                     self_shape,
                     half_segment,
+                    core_radius: core,
                     world_radius: core + margin,
                     self_radius: core + 0.5 * margins.self_,
                 });
@@ -219,14 +278,44 @@ impl RobotCollision {
                 }
             }
         }
-        let reach = Reach::new(robot.kinematics(), &bodies);
+        let kin = robot.kinematics();
+        let tcp = robot.tcp_link();
+        let mut chains: Vec<Vec<Mover>> = bodies.iter().map(|b| chain_to(kin, b.link)).collect();
+        chains.push(chain_to(kin, tcp));
+        let mut offsets = Vec::with_capacity(chains.len() + 1);
+        let mut next = 0;
+        for chain in &chains {
+            offsets.push(next);
+            next += chain.len() + 1;
+        }
+        offsets.push(next);
+        let tcp_chain = &chains[bodies.len()];
+        let self_shared = self_pairs
+            .iter()
+            .map(|&(i, j)| shared(&chains[i], &chains[j]))
+            .collect();
+        let tcp_shared = chains[..bodies.len()]
+            .iter()
+            .map(|c| shared(c, tcp_chain))
+            .collect();
+        let mut turned: Vec<(usize, Vector3<f64>)> = chains
+            .iter()
+            .flatten()
+            .filter_map(|m| m.axis.map(|axis| (m.link, axis)))
+            .collect();
+        turned.sort_by_key(|(link, _)| *link);
+        turned.dedup_by_key(|(link, _)| *link);
         RobotCollision {
             bodies,
             self_pairs,
             mount_links: robot.mount_links().to_vec(),
             margins,
-            reach,
-            tcp: robot.tcp_link(),
+            tcp,
+            chains,
+            offsets,
+            self_shared,
+            tcp_shared,
+            turned,
         }
     }
 
@@ -235,78 +324,9 @@ impl RobotCollision {
         self.margins
     }
 
-    /// The per-joint reach bounds.
-    pub fn reach(&self) -> &Reach {
-        &self.reach
-    }
-
     /// Number of link pairs tested against each other.
     pub fn self_pair_count(&self) -> usize {
         self.self_pairs.len()
-    }
-}
-
-impl Reach {
-    fn new(kin: &Kinematics, bodies: &[Body]) -> Reach {
-        let links = kin.links();
-        // Distance bound from a link's frame origin to the origin of each descendant: the sum
-        // of the joint offsets along the way.
-        let chain_length = |from: usize, to: usize| -> Option<f64> {
-            let mut length = 0.0;
-            let mut at = to;
-            while at != from {
-                length += links[at].origin.translation.vector.norm();
-                at = links[at].parent?;
-            }
-            Some(length)
-        };
-        let dof = kin.dof();
-        let mut reach = Reach {
-            arm: vec![0.0; dof],
-            hand: vec![0.0; dof],
-            tcp: vec![0.0; dof],
-            prismatic: vec![false; dof],
-        };
-        for (j, &joint_link) in kin.arm_links().iter().enumerate() {
-            reach.prismatic[j] = matches!(
-                links[joint_link].motion,
-                crate::fk::Motion::Prismatic { .. }
-            );
-            for b in bodies {
-                if let Some(d) = chain_length(joint_link, b.link) {
-                    let r = d + b.local.translation.vector.norm() + b.half_segment + b.world_radius;
-                    let slot = match b.group {
-                        Group::Arm => &mut reach.arm[j],
-                        Group::Hand => &mut reach.hand[j],
-                    };
-                    *slot = slot.max(r);
-                }
-            }
-            if let Some(d) = chain_length(joint_link, kin.tcp_index()) {
-                reach.tcp[j] = d;
-            }
-        }
-        reach
-    }
-
-    /// Upper bound on how far any point of each group moves when the arm goes in a straight
-    /// joint-space line from `a` to `b`: (arm, hand, held object of extent `held_radius`
-    /// about the TCP).
-    pub fn displacement(&self, a: &[f64], b: &[f64], held_radius: f64) -> [f64; 3] {
-        let mut d = [0.0; 3];
-        for j in 0..a.len() {
-            let dq = (b[j] - a[j]).abs();
-            if self.prismatic[j] {
-                for v in &mut d {
-                    *v += dq;
-                }
-            } else {
-                d[0] += self.arm[j] * dq;
-                d[1] += self.hand[j] * dq;
-                d[2] += (self.tcp[j] + held_radius) * dq;
-            }
-        }
-        d
     }
 }
 
@@ -314,14 +334,16 @@ impl Held {
     /// An object of `shape` held with pose `in_tcp` in the TCP frame, grown by `margin`.
     pub fn new(name: &str, shape: Shape, in_tcp: Pose, margin: f64) -> Held {
         let (grown, local) = parry_convert::object_shape(&shape, margin);
-        let h = shape.half_extents();
+        let core = shape.half_extents().norm();
         Held {
             name: name.to_string(),
             shape,
             in_tcp,
             grown,
             local,
-            radius: in_tcp.translation.vector.norm() + h.norm() + margin,
+            margin,
+            core,
+            radius: in_tcp.translation.vector.norm() + core + margin,
         }
     }
 
@@ -392,6 +414,7 @@ struct Placed {
     b: Vector3<f64>,
 }
 
+#[inline(always)]
 fn placed(body: &Body, link_pose: &Pose) -> Placed {
     let pose = link_pose * body.local;
     let a = (pose * Point3::new(0.0, 0.0, -body.half_segment)).coords;
@@ -399,8 +422,18 @@ fn placed(body: &Body, link_pose: &Pose) -> Placed {
     Placed { pose, a, b }
 }
 
-fn box_overlap(p: &Placed, r: f64, min: &Vector3<f64>, max: &Vector3<f64>) -> bool {
-    (0..3).all(|i| p.a[i].min(p.b[i]) - r <= max[i] && p.a[i].max(p.b[i]) + r >= min[i])
+/// The world-axis-aligned box around `p` grown by `r`: its lower and upper corners.
+fn bounding_box(p: &Placed, r: f64) -> [Vector3<f64>; 2] {
+    let grow = Vector3::repeat(r);
+    [p.a.inf(&p.b) - grow, p.a.sup(&p.b) + grow]
+}
+
+/// Squared distance between two world-axis-aligned boxes (0 when they overlap).
+fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
+    (a[0] - max)
+        .sup(&(min - a[1]))
+        .sup(&Vector3::zeros())
+        .norm_squared()
 }
 
 /// Squared distance between segments [p1, q1] and [p2, q2] (Ericson, Real-Time Collision
@@ -455,6 +488,55 @@ fn segment_distance_sq(
     (c1 - c2).norm_squared()
 }
 
+/// Work space of an edge check: the joint motion of the stretch being proved free and the
+/// motion bounds derived from it.
+struct Sweep {
+    /// How far each arm joint turns or slides from the check to either end of the stretch.
+    half: Vec<f64>,
+    /// For each chain k of the model, `bounds[offsets[k] + m]` bounds how far any point of
+    /// its element moves through the joints `m..` of the chain (0 past the last one).
+    bounds: Vec<f64>,
+}
+
+impl Sweep {
+    fn new(model: &RobotCollision, dof: usize) -> Sweep {
+        Sweep {
+            half: vec![0.0; dof],
+            bounds: vec![0.0; model.offsets.last().copied().unwrap_or(0)],
+        }
+    }
+}
+
+/// Tracks, during one check, how much of a stretch its clearances prove free: the fraction
+/// of the stretch (up to 1) over which no element moves further than its clearance plus
+/// half its margin.
+struct Proof<'s> {
+    sweep: &'s Sweep,
+    offsets: &'s [usize],
+    fraction: f64,
+}
+
+impl Proof<'_> {
+    /// Bound on how far chain `k` moves through its joints from `from` on.
+    fn moved(&self, k: usize, from: usize) -> f64 {
+        self.sweep.bounds[self.offsets[k] + from]
+    }
+
+    /// Whether a clearance larger than 0 would shorten nothing: an element moving `moved`
+    /// with `slack` to spare is already within the current fraction.
+    fn settled(&self, moved: f64, slack: f64) -> bool {
+        moved * self.fraction <= slack
+    }
+
+    /// Limits the fraction to what `slack` (clearance plus half the margin) allows an element
+    /// moving up to `moved` over the whole stretch.
+    fn limit(&mut self, moved: f64, slack: f64) {
+        if moved * self.fraction > slack {
+            self.fraction = slack / moved;
+        }
+    }
+}
+
 /// Checks configurations of one robot in one scene.
 #[derive(Debug, Clone)]
 pub struct Checker<'a> {
@@ -497,13 +579,107 @@ impl<'a> Checker<'a> {
         held: Option<&Held>,
         allow: &Allowances,
     ) -> Option<Hit> {
-        let within = q
-            .iter()
-            .zip(self.robot.joint_limits())
-            .all(|(v, [lo, hi])| *v >= *lo && *v <= *hi);
-        if !within {
+        if !self.within_limits(q) {
             return Some(Hit::Limits);
         }
+        self.probe::<false>(q, width, held, allow, None).err()
+    }
+
+    fn within_limits(&self, q: &[f64]) -> bool {
+        q.iter()
+            .zip(self.robot.joint_limits())
+            .all(|(v, [lo, hi])| *v >= *lo && *v <= *hi)
+    }
+
+    /// Whether `q` is collision-free (see [`Checker::check`]).
+    pub fn is_free(&self, q: &[f64], width: f64, held: Option<&Held>, allow: &Allowances) -> bool {
+        self.check(q, width, held, allow).is_none()
+    }
+
+    /// Writes into `sweep.bounds` the motion bounds of every chain for the joint motion
+    /// `sweep.half` about the configuration whose link poses are `poses`.
+    ///
+    /// Going from the last joint of a chain to the first, with D the bound through the joints
+    /// beyond joint j: the point stays within r + D of joint j's axis, r being its distance
+    /// at the configuration (the element's centre's distance plus the element's extent), so
+    /// turning joint j by Δ adds (r + D)·|Δ|; sliding it adds |Δ|.
+    fn sweep_bounds(
+        &self,
+        poses: &[Pose],
+        placed_bodies: &[Placed],
+        held: Option<&Held>,
+        sweep: &mut Sweep,
+    ) {
+        let model = self.model;
+        let tcp = poses[model.tcp];
+        let mut axes = [Vector3::zeros(); MAX_LINKS];
+        for &(link, axis) in &model.turned {
+            axes[link] = poses[link].rotation * axis;
+        }
+        for (k, chain) in model.chains.iter().enumerate() {
+            let (centre, extent) = match (placed_bodies.get(k), model.bodies.get(k)) {
+                (Some(p), Some(b)) => (p.pose.translation.vector, b.half_segment + b.core_radius),
+                _ => match held {
+                    Some(h) => ((tcp * h.in_tcp).translation.vector, h.core),
+                    None => (tcp.translation.vector, 0.0),
+                },
+            };
+            let slots = &mut sweep.bounds[model.offsets[k]..model.offsets[k + 1]];
+            let mut d = 0.0;
+            slots[chain.len()] = d;
+            for (m, mover) in chain.iter().enumerate().rev() {
+                let turn = mover.scale.abs() * sweep.half[mover.index];
+                d += if mover.axis.is_some() {
+                    let origin = poses[mover.link].translation.vector;
+                    let r = (centre - origin).cross(&axes[mover.link]).norm() + extent;
+                    (r + d) * turn
+                } else {
+                    turn
+                };
+                slots[m] = d;
+            }
+        }
+    }
+
+    /// Upper bound on how far any point of the robot's collision elements, or of `held`,
+    /// moves when the arm goes in a straight joint-space line from `a` to `b` with gripper
+    /// opening `width` (the bound of [`Checker::edge`], taken about the edge's midpoint).
+    pub fn sweep_bound(&self, a: &[f64], b: &[f64], width: f64, held: Option<&Held>) -> f64 {
+        let mid: Vec<f64> = a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
+        let n = self.robot.links().len().min(MAX_LINKS);
+        let mut poses = [Pose::identity(); MAX_LINKS];
+        self.robot
+            .kinematics()
+            .link_poses_into(&mid, width, &mut poses[..n]);
+        let mut placed_bodies = [Placed::default(); MAX_BODIES];
+        for (slot, body) in placed_bodies.iter_mut().zip(&self.model.bodies) {
+            *slot = placed(body, &poses[body.link]);
+        }
+        let nb = self.model.bodies.len().min(MAX_BODIES);
+        let mut sweep = Sweep::new(self.model, a.len());
+        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
+            *h = 0.5 * (y - x).abs();
+        }
+        self.sweep_bounds(&poses[..n], &placed_bodies[..nb], held, &mut sweep);
+        let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
+        (0..last)
+            .map(|k| sweep.bounds[self.model.offsets[k]])
+            .fold(0.0, f64::max)
+            * 2.0
+    }
+
+    /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
+    /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
+    /// proved free (see the module documentation). Plain checks are compiled without the
+    /// proof's work.
+    fn probe<const PROVE: bool>(
+        &self,
+        q: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+        sweep: Option<&mut Sweep>,
+    ) -> Result<f64, Hit> {
         let links = self.robot.links();
         let n = links.len().min(MAX_LINKS);
         let mut poses = [Pose::identity(); MAX_LINKS];
@@ -513,15 +689,26 @@ impl<'a> Checker<'a> {
         for p in &mut poses[..n] {
             *p = self.scene.base * *p;
         }
-        let bodies = &self.model.bodies;
+        let model = self.model;
+        let bodies = &model.bodies;
         let nb = bodies.len().min(MAX_BODIES);
         let mut placed_bodies = [Placed::default(); MAX_BODIES];
         for (slot, b) in placed_bodies.iter_mut().zip(bodies) {
             *slot = placed(b, &poses[b.link]);
         }
         let placed_bodies = &placed_bodies[..nb];
+        let mut proof = sweep.filter(|_| PROVE).map(|s| {
+            self.sweep_bounds(&poses[..n], placed_bodies, held, s);
+            Proof {
+                sweep: s,
+                offsets: &model.offsets,
+                fraction: 1.0,
+            }
+        });
+        let m = model.margins;
         // Self collision: bounding balls, then segment distance, then parry.
-        for &(i, j) in &self.model.self_pairs {
+        let self_slack = 0.5 * m.self_;
+        for (p, &(i, j)) in model.self_pairs.iter().enumerate() {
             let (Some(pa), Some(pb)) = (placed_bodies.get(i), placed_bodies.get(j)) else {
                 continue;
             };
@@ -529,108 +716,119 @@ impl<'a> Checker<'a> {
             let reach = ba.self_radius + bb.self_radius;
             let balls = reach + ba.half_segment + bb.half_segment;
             let centres = 0.5 * ((pa.a + pa.b) - (pb.a + pb.b));
-            if centres.norm_squared() > balls * balls
+            let moved = proof.as_ref().map_or(0.0, |pr| {
+                let s = model.self_shared[p];
+                pr.moved(i, s) + pr.moved(j, s)
+            });
+            let centres_sq = centres.norm_squared();
+            if let Some(pr) = proof.as_mut() {
+                // The distance of the bounding balls first, the segments' only if it matters.
+                let balls_gap = centres_sq.sqrt() - balls;
+                if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
+                    continue;
+                }
+                let gap = segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b).sqrt() - reach;
+                if gap > 0.0 {
+                    pr.limit(moved, self_slack + gap);
+                    continue;
+                }
+            } else if centres_sq > balls * balls
                 || segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b) > reach * reach
             {
                 continue;
             }
             if parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose) {
-                return Some(Hit::SelfCollision(
+                return Err(Hit::SelfCollision(
                     links[ba.link].name.clone(),
                     links[bb.link].name.clone(),
                 ));
             }
+            if let Some(pr) = proof.as_mut() {
+                pr.limit(moved, self_slack);
+            }
         }
         // Robot against the world.
-        for (b, p) in bodies.iter().zip(placed_bodies) {
-            for (k, o) in self.scene.obstacles.iter().enumerate() {
-                if Some(k) == self.scene.mount && self.model.mount_links.contains(&b.link) {
+        for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
+            let slack = 0.5
+                * match b.group {
+                    Group::Arm => m.arm,
+                    Group::Hand => m.hand,
+                };
+            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
+            let bounds = bounding_box(p, b.world_radius);
+            for (index, o) in self.scene.obstacles.iter().enumerate() {
+                if Some(index) == self.scene.mount && model.mount_links.contains(&b.link) {
                     continue;
                 }
                 if b.group == Group::Hand && allow.hand_may_touch.contains(&o.name) {
                     continue;
                 }
-                if !box_overlap(p, b.world_radius, &o.min, &o.max) {
-                    continue;
-                }
-                if parry_convert::intersects(&b.world_shape, &p.pose, &o.shape, &o.pose) {
-                    return Some(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                if !clear_of(&b.world_shape, p, &bounds, o, proof.as_mut(), moved, slack) {
+                    return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 }
             }
         }
         // The held object against the world and the arm.
         if let Some(h) = held {
-            let pose = poses[self.model.tcp] * h.in_tcp * h.local;
-            let centre = (poses[self.model.tcp] * h.in_tcp).translation.vector;
+            let pose = poses[model.tcp] * h.in_tcp * h.local;
+            let centre = (poses[model.tcp] * h.in_tcp).translation.vector;
             let ball = Placed {
                 pose,
                 a: centre,
                 b: centre,
             };
+            let extent = h.radius - h.in_tcp.translation.vector.norm();
+            let held_chain = bodies.len();
+            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(held_chain, 0));
+            let bounds = bounding_box(&ball, extent);
             for o in &self.scene.obstacles {
                 if allow.held_may_touch.contains(&o.name) {
                     continue;
                 }
-                if !box_overlap(
-                    &ball,
-                    h.radius - h.in_tcp.translation.vector.norm(),
-                    &o.min,
-                    &o.max,
-                ) {
-                    continue;
-                }
-                if parry_convert::intersects(&h.grown, &pose, &o.shape, &o.pose) {
-                    return Some(Hit::HeldWorld(h.name.clone(), o.name.clone()));
+                let slack = 0.5 * h.margin;
+                if !clear_of(&h.grown, &ball, &bounds, o, proof.as_mut(), moved, slack) {
+                    return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }
-            let extent = h.radius - h.in_tcp.translation.vector.norm();
-            for (b, p) in bodies.iter().zip(placed_bodies) {
+            let slack = 0.5 * (h.margin + 0.5 * m.self_);
+            for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
                 if b.group == Group::Hand {
                     continue;
                 }
                 let reach = extent + b.self_radius;
-                if segment_distance_sq(&p.a, &p.b, &centre, &centre) > reach * reach {
+                let moved = proof.as_ref().map_or(0.0, |pr| {
+                    let s = model.tcp_shared[k];
+                    pr.moved(held_chain, s) + pr.moved(k, s)
+                });
+                let d_sq = segment_distance_sq(&p.a, &p.b, &centre, &centre);
+                if d_sq > reach * reach {
+                    if let Some(pr) = proof.as_mut() {
+                        pr.limit(moved, slack + d_sq.sqrt() - reach);
+                    }
                     continue;
                 }
                 if parry_convert::intersects(&b.self_shape, &p.pose, &h.grown, &pose) {
-                    return Some(Hit::HeldRobot(h.name.clone(), links[b.link].name.clone()));
+                    return Err(Hit::HeldRobot(h.name.clone(), links[b.link].name.clone()));
+                }
+                if let Some(pr) = proof.as_mut() {
+                    pr.limit(moved, slack);
                 }
             }
         }
-        None
-    }
-
-    /// Whether `q` is collision-free (see [`Checker::check`]).
-    pub fn is_free(&self, q: &[f64], width: f64, held: Option<&Held>, allow: &Allowances) -> bool {
-        self.check(q, width, held, allow).is_none()
-    }
-
-    /// How many checks the straight joint-space edge from `a` to `b` needs so that no point of
-    /// the arm, hand or held object moves more than its own margin between two checks; then
-    /// the clearance never drops below half the margin anywhere along the edge (see
-    /// [`Checker::edge`]).
-    pub fn edge_steps(&self, a: &[f64], b: &[f64], held: Option<&Held>) -> usize {
-        let m = self.model.margins;
-        let d = self
-            .model
-            .reach
-            .displacement(a, b, held.map_or(0.0, |h| h.radius));
-        let mut steps = (d[0] / m.arm).max(d[1] / m.hand);
-        if held.is_some() {
-            steps = steps.max(d[2] / m.held);
-        }
-        (steps.ceil() as usize).max(1)
+        Ok(proof.map_or(1.0, |pr| pr.fraction))
     }
 
     /// The first collision on the straight joint-space edge from `a` to `b` (endpoints
-    /// included), checked at [`Checker::edge_steps`] evenly spaced configurations in
-    /// bisection order so that collisions are found early.
+    /// included), or `None` if every clearance keeps at least half its margin all along it.
     ///
-    /// Resolution: between two neighbouring checks every point of a group moves at most that
-    /// group's margin m, so at any intermediate configuration each point is within m/2 of
-    /// where it was at the nearer check; the clearance to the world therefore stays at least
-    /// m/2 all along the edge, and two links grown by half the self margin each (≥ the arm
-    /// margin) never interpenetrate.
+    /// Each check on the edge proves a stretch about it free: no point moves further than the
+    /// clearance found there plus half its margin, by the bound of [`Checker::sweep_bound`]
+    /// taken at the check for the stretch (see the module documentation). Both ends are
+    /// checked first, each proving a stretch into the edge; then the midpoint of what is left,
+    /// and so on breadth first on either side of what each check proved, so that checks
+    /// spread over the edge in bisection order and collisions are found early. Each check
+    /// proves at least half the smallest margin of motion, so the number of checks is at most
+    /// about the bound on how far points move divided by that.
     pub fn edge(
         &self,
         a: &[f64],
@@ -639,32 +837,82 @@ impl<'a> Checker<'a> {
         held: Option<&Held>,
         allow: &Allowances,
     ) -> Option<Hit> {
-        let steps = self.edge_steps(a, b, held);
-        let mut q = vec![0.0; a.len()];
-        let mut at = |k: usize| -> Option<Hit> {
-            let t = k as f64 / steps as f64;
-            for (i, v) in q.iter_mut().enumerate() {
-                *v = a[i] + t * (b[i] - a[i]);
-            }
-            self.check(&q, width, held, allow)
-        };
-        if let Some(hit) = at(steps).or_else(|| at(0)) {
-            return Some(hit);
+        if !self.within_limits(a) || !self.within_limits(b) {
+            return Some(Hit::Limits);
         }
-        // Bisection order: midpoints of ever finer subdivisions.
-        let mut stride = steps.next_power_of_two();
-        while stride > 1 {
-            let half = stride / 2;
-            let mut k = half;
-            while k < steps {
-                if let Some(hit) = at(k) {
-                    return Some(hit);
-                }
-                k += stride;
+        let mut sweep = Sweep::new(self.model, a.len());
+        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
+            *h = (y - x).abs();
+        }
+        // Each end proves a stretch into the edge (the bound covers the whole edge about it).
+        let mut ends = [0.0; 2];
+        for (end, q) in ends.iter_mut().zip([b, a]) {
+            match self.probe::<true>(q, width, held, allow, Some(&mut sweep)) {
+                Ok(fraction) => *end = fraction,
+                Err(hit) => return Some(hit),
             }
-            stride = half;
+        }
+        let mut open = VecDeque::new();
+        if ends[0] + ends[1] < 1.0 {
+            open.push_back((ends[1], 1.0 - ends[0]));
+        }
+        let mut q = vec![0.0; a.len()];
+        while let Some((lo, hi)) = open.pop_front() {
+            let mid = 0.5 * (lo + hi);
+            let half = 0.5 * (hi - lo);
+            for i in 0..a.len() {
+                q[i] = a[i] + mid * (b[i] - a[i]);
+                sweep.half[i] = half * (b[i] - a[i]).abs();
+            }
+            // Within the joint limits: the ends are, and the limits are a box.
+            let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
+                Ok(fraction) => half * fraction,
+                Err(hit) => return Some(hit),
+            };
+            if proved < half {
+                open.push_back((lo, mid - proved));
+                open.push_back((mid + proved, hi));
+            }
         }
         None
+    }
+}
+
+/// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
+/// clear of `o`; with a proof, for an element moving up to `moved` with `slack` to spare,
+/// the clearance found also limits the fraction proved free.
+#[inline(always)]
+fn clear_of(
+    shape: &SharedShape,
+    placed: &Placed,
+    bounds: &[Vector3<f64>; 2],
+    o: &Obstacle,
+    proof: Option<&mut Proof>,
+    moved: f64,
+    slack: f64,
+) -> bool {
+    let Some(pr) = proof else {
+        let overlap = (0..3).all(|i| bounds[0][i] <= o.max[i] && bounds[1][i] >= o.min[i]);
+        return !overlap || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    };
+    let gap_sq = box_gap_sq(bounds, &o.min, &o.max);
+    if gap_sq > 0.0 {
+        pr.limit(moved, slack + gap_sq.sqrt());
+        return true;
+    }
+    if pr.settled(moved, slack) {
+        return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    }
+    match parry_convert::distance(shape, &placed.pose, &o.shape, &o.pose) {
+        Some(d) if d > 0.0 => {
+            pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
+            true
+        }
+        Some(_) => false,
+        None => {
+            pr.limit(moved, slack);
+            !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose)
+        }
     }
 }
 
@@ -799,14 +1047,15 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
 
-        /// An edge reported free keeps half of every margin at a 10x denser re-check.
+        /// An edge reported free keeps half of every margin (between links too) at a re-check
+        /// dense enough that no point moves more than a tenth of the smallest margin.
         #[test]
         fn free_edges_keep_half_their_margins_everywhere(a in arb_q(), b in arb_q(), t in 0.0..1.0f64) {
             let robot = Robot::panda().unwrap();
             let model = RobotCollision::new(&robot);
             let m = model.margins();
             let half = RobotCollision::with_margins(&robot, Margins {
-                arm: m.arm / 2.0, hand: m.hand / 2.0, held: m.held / 2.0, self_: 1e-9,
+                arm: m.arm / 2.0, hand: m.hand / 2.0, held: m.held / 2.0, self_: m.self_ / 2.0,
             });
             let task = builtin::task("inspection").unwrap().unwrap();
             let scene = Scene::new(&task.world, &[]);
@@ -815,9 +1064,10 @@ mod tests {
             // Shorten the edge so that a good share of them are free.
             let b: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + t * 0.5 * (y - x)).collect();
             if checker.edge(&a, &b, 0.08, None, &none()).is_none() {
-                let n = 10 * checker.edge_steps(&a, &b, None);
+                let smallest = m.arm.min(m.hand).min(m.self_ / 2.0);
+                let n = (10.0 * checker.sweep_bound(&a, &b, 0.08, None) / smallest).ceil() as usize;
                 for k in 0..=n {
-                    let s = k as f64 / n as f64;
+                    let s = k as f64 / n.max(1) as f64;
                     let q: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + s * (y - x)).collect();
                     prop_assert_eq!(dense.check(&q, 0.08, None, &none()), None);
                 }

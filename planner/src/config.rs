@@ -115,12 +115,6 @@ impl RobotConfig {
         ] {
             positive(name, v)?;
         }
-        if c.self_margin < c.arm_margin || c.self_margin < c.hand_margin {
-            return Err(format!(
-                "collision.self_margin ({}) must be at least arm_margin ({}) and hand_margin ({}): edges are checked at a spacing of those margins",
-                c.self_margin, c.arm_margin, c.hand_margin
-            ));
-        }
         Ok(())
     }
 }

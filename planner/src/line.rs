@@ -136,3 +136,72 @@ pub fn plan_line(
     }
     Ok(path)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::{Allowances, Checker, RobotCollision, Scene};
+    use crate::Robot;
+    use akl_scene::builtin;
+    use akl_tsr::nalgebra::UnitQuaternion;
+    use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// A line that plans (from a random collision-free configuration to a pose up to
+        /// 15 cm and 0.5 rad away) starts where the arm is, ends on the target pose, keeps the
+        /// TCP within 1 mm of the segment at and between its waypoints (joint-space
+        /// interpolation), stays within the joint limits and never moves a joint further than
+        /// the jump threshold between waypoints.
+        #[test]
+        fn planned_lines_stay_on_their_line(seed in 0..100_000u64) {
+            let robot = Robot::panda().unwrap();
+            let model = RobotCollision::new(&robot);
+            let world = builtin::task("inspection").unwrap().unwrap().world;
+            let scene = Scene::new(&world, &[]);
+            let checker = Checker::new(&robot, &model, &scene);
+            let allow = Allowances::default();
+            let space = Space { checker: &checker, width: robot.open_width(), held: None, allow: &allow };
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let mut start = vec![0.0; robot.dof()];
+            loop {
+                space.sample(&mut rng, &mut start);
+                if space.valid(&start) {
+                    break;
+                }
+            }
+            let base = world.robot_base;
+            let from = base * robot.tcp_pose(&start);
+            let offset = Vector3::from_fn(|_, _| rng.gen_range(-0.15..0.15));
+            let axis = Vector3::from_fn(|_, _| rng.gen_range(-1.0..1.0));
+            let turn = UnitQuaternion::from_scaled_axis(axis.normalize() * rng.gen_range(0.0..0.5));
+            let to = Pose::from_parts(
+                Translation3::from(from.translation.vector + offset),
+                turn * from.rotation,
+            );
+            let options = LineOptions::default();
+            // The property is about the lines that plan; others report why they cannot.
+            let Ok(path) = plan_line(&space, &start, &from, &to, &base, &options) else { return Ok(()) };
+            prop_assert_eq!(&path[0], &start);
+            let end = base * robot.tcp_pose(&path[path.len() - 1]);
+            prop_assert!((end.translation.vector - to.translation.vector).norm() < 1e-6);
+            prop_assert!(end.rotation.angle_to(&to.rotation) < 1e-6);
+            let (a, b) = (from.translation.vector, to.translation.vector);
+            for w in path.windows(2) {
+                prop_assert!(robot.check_joints(&w[1]).is_ok());
+                for (x, y) in w[0].iter().zip(&w[1]) {
+                    prop_assert!((y - x).abs() <= options.max_joint_step);
+                }
+                for k in 0..=10 {
+                    let s = k as f64 / 10.0;
+                    let q: Vec<f64> = w[0].iter().zip(&w[1]).map(|(x, y)| x + s * (y - x)).collect();
+                    let p = (base * robot.tcp_pose(&q)).translation.vector;
+                    prop_assert!(distance_to_segment(&p, &a, &b) <= 1e-3);
+                }
+            }
+        }
+    }
+}

@@ -88,3 +88,11 @@ pub fn intersects(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> boo
     parry3d::query::intersection_test(&pose(pa), a.as_ref(), &pose(pb), b.as_ref())
         .is_ok_and(|r| r.intersecting)
 }
+
+/// Distance between two parry shapes at the given (f64) poses, 0 when they touch or overlap;
+/// `None` if parry has no distance query for the pair.
+pub fn distance(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
+    parry3d::query::distance(&pose(pa), a.as_ref(), &pose(pb), b.as_ref())
+        .ok()
+        .map(|d| f64::from(d.distance).max(0.0))
+}

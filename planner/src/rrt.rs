@@ -225,3 +225,77 @@ pub fn rrt_connect<R: Rng + ?Sized>(
         iterations: options.max_iterations,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::{Allowances, Checker, Margins, RobotCollision, Scene};
+    use crate::shortcut::shortcut;
+    use crate::Robot;
+    use akl_scene::{builtin, Object, Shape};
+    use akl_tsr::pose::pose_from_xyz;
+    use proptest::prelude::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(16))]
+
+        /// Every path RRT-Connect returns between random collision-free configurations, as
+        /// found and after shortcutting, joins the start to the goal and keeps half of every
+        /// margin under a re-check dense enough that no point moves more than a tenth of the
+        /// smallest margin between two samples.
+        #[test]
+        fn returned_paths_are_free_under_a_dense_recheck(seed in 0..100_000u64) {
+            let robot = Robot::panda().unwrap();
+            let model = RobotCollision::new(&robot);
+            let m = model.margins();
+            let half = RobotCollision::with_margins(&robot, Margins {
+                arm: m.arm / 2.0, hand: m.hand / 2.0, held: m.held / 2.0, self_: m.self_ / 2.0,
+            });
+            let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+            world.objects.push(Object {
+                name: "pole".into(),
+                shape: Shape::Box { size: [0.04, 0.04, 0.6] },
+                pose: pose_from_xyz([0.40, 0.12, 0.3]),
+                movable: false,
+                mass: 0.0,
+                friction: 0.5,
+            });
+            let scene = Scene::new(&world, &[]);
+            let checker = Checker::new(&robot, &model, &scene);
+            let dense = Checker::new(&robot, &half, &scene);
+            let allow = Allowances::default();
+            let width = robot.open_width();
+            let space = Space { checker: &checker, width, held: None, allow: &allow };
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let mut free = || {
+                let mut q = vec![0.0; robot.dof()];
+                loop {
+                    space.sample(&mut rng, &mut q);
+                    if space.valid(&q) {
+                        return q;
+                    }
+                }
+            };
+            let (start, goal) = (free(), free());
+            let found = rrt_connect(&start, std::slice::from_ref(&goal), &space, &RrtOptions::default(), &mut rng);
+            // The property is about the paths returned; an exhausted budget returns none.
+            let RrtResult::Found { path, .. } = found else { return Ok(()) };
+            let short = shortcut(path.clone(), &space, 50, &mut rng);
+            let smallest = m.arm.min(m.hand).min(m.self_ / 2.0);
+            for p in [path, short] {
+                prop_assert_eq!(&p[0], &start);
+                prop_assert_eq!(&p[p.len() - 1], &goal);
+                for w in p.windows(2) {
+                    let n = (10.0 * checker.sweep_bound(&w[0], &w[1], width, None) / smallest).ceil() as usize;
+                    for k in 0..=n {
+                        let s = k as f64 / n.max(1) as f64;
+                        let q: Vec<f64> = w[0].iter().zip(&w[1]).map(|(x, y)| x + s * (y - x)).collect();
+                        prop_assert_eq!(dense.check(&q, width, None, &allow), None);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,5 +1,5 @@
 //! The joint space a segment is planned in: limits, the collision context (gripper opening,
-//! held object, allowed contacts) and edge validity at the documented resolution.
+//! held object, allowed contacts) and edge validity (all along the edge, see `collision`).
 
 use crate::collision::{Allowances, Checker, Held, Hit};
 use rand::Rng;

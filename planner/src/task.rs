@@ -1198,7 +1198,7 @@ mod tests {
         assert_sound(&robot, &task.world, &plan);
     }
 
-    /// Success rate over 100 randomized worlds per task (about a minute):
+    /// Success rate over 100 randomized worlds per task (seconds in release):
     /// `cargo test -p akl-planner --release randomized_success_rate -- --ignored --nocapture`.
     #[test]
     #[ignore]
