@@ -277,6 +277,17 @@ fn ratio(baseline: Duration, ours: Duration) -> f64 {
     baseline.as_secs_f64() / ours.as_secs_f64().max(1e-12)
 }
 
+/// The planning space of a free move with the hand open and nothing held, as in every
+/// problem here.
+fn open_hand<'a>(checker: &'a Checker<'a>, allow: &'a Allowances) -> Space<'a> {
+    Space {
+        checker,
+        width: checker.robot().open_width(),
+        held: None,
+        allow,
+    }
+}
+
 fn main() {
     let robot = Robot::panda().expect("the built-in Panda loads");
     let model = RobotCollision::new(&robot);
@@ -329,12 +340,7 @@ fn main() {
         let mut direct = 0;
         for (k, p) in problems.iter().enumerate() {
             let checker = Checker::new(&robot, &model, &scenes[p.world]);
-            let space = Space {
-                checker: &checker,
-                width: robot.open_width(),
-                held: None,
-                allow: &allow,
-            };
+            let space = open_hand(&checker, &allow);
             let search = !space.edge_valid(&p.start, &p.goal);
             direct += usize::from(!search);
             for seed in 0..SEEDS {
@@ -419,12 +425,7 @@ fn main() {
                     k = (k + 1) % problems.len().max(1);
                     let p = &problems[k];
                     let checker = Checker::new(&robot, &model, &scenes[p.world]);
-                    let space = Space {
-                        checker: &checker,
-                        width: robot.open_width(),
-                        held: None,
-                        allow: &allow,
-                    };
+                    let space = open_hand(&checker, &allow);
                     let mut r = ChaCha8Rng::seed_from_u64(k as u64);
                     black_box(rrt_connect(
                         &p.start,
