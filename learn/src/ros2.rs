@@ -57,6 +57,57 @@ pub struct Ros2Topics {
     pub closed_below: f64,
 }
 
+/// The type of an end-effector or object pose topic.
+const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
+/// The type of the gripper's topic.
+const JOINT_STATE: &str = "sensor_msgs/msg/JointState";
+/// The type of `/tf` and `/tf_static`.
+const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
+
+impl Ros2Topics {
+    /// The message types the import decodes on `topic`: one per role the topic plays (none
+    /// when the import does not read it).
+    fn expected_schemas(&self, topic: &str) -> impl Iterator<Item = &'static str> + '_ {
+        let is_pose_topic = std::iter::once(&self.ee)
+            .chain(self.objects.iter().map(|(_, source)| source))
+            .any(|source| *source == PoseSource::Topic(topic.to_string()));
+        [
+            (topic == "/tf" || topic == "/tf_static", TF_MESSAGE),
+            (topic == self.gripper, JOINT_STATE),
+            (is_pose_topic, POSE_STAMPED),
+        ]
+        .into_iter()
+        .filter_map(|(reads, schema)| reads.then_some(schema))
+    }
+
+    /// Refuses a topic the import reads whose declared type is not the one it decodes, rather
+    /// than failing later on bytes that do not parse. An empty type name (a bag without
+    /// schemas) passes; `pkg/Type` is taken as `pkg/msg/Type`.
+    fn check_schema(&self, topic: &str, schema: &str) -> Result<(), String> {
+        if schema.is_empty() {
+            return Ok(());
+        }
+        let declared = if schema.contains("/msg/") {
+            schema.to_string()
+        } else {
+            schema.replacen('/', "/msg/", 1)
+        };
+        let Some(expected) = self.expected_schemas(topic).find(|e| *e != declared) else {
+            return Ok(());
+        };
+        let hint = if schema.ends_with("JointState") && expected == POSE_STAMPED {
+            ": a pose from joint states needs the robot's forward kinematics, which the import \
+             does not do; name a frame of the transform tree instead (tf:FRAME, e.g. the tool \
+             frame the robot's state publisher broadcasts)"
+        } else {
+            ""
+        };
+        Err(format!(
+            "topic {topic} carries `{schema}`, but the import reads `{expected}` there{hint}"
+        ))
+    }
+}
+
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 struct Time {
     sec: i32,
@@ -274,6 +325,11 @@ pub fn import_ros2(bytes: &[u8], topics: &Ros2Topics) -> Result<Demo, DemoError>
         let count = counts.entry(topic.to_string()).or_default();
         *count += 1;
         let t = message.log_time as f64 * 1e-9;
+        if let Some(schema) = &message.channel.schema {
+            topics
+                .check_schema(topic, &schema.name)
+                .map_err(DemoError::Format)?;
+        }
         importer
             .take(topic, t, &message.data)
             .map_err(|m| DemoError::Format(format!("{topic}, message {count}: {m}")))?;
@@ -521,5 +577,39 @@ mod tests {
         assert!(e.contains("/ee_pose") && e.contains("`map`"), "{e}");
         let e = import_ros2(b"nonsense", &topics()).unwrap_err().to_string();
         assert!(e.contains("MCAP"), "{e}");
+    }
+
+    #[test]
+    fn a_topic_of_the_wrong_type_is_named_with_its_type() {
+        let mut t = topics();
+        t.ee = PoseSource::parse("/joint_states");
+        let e = import_ros2(&bag(), &t).unwrap_err().to_string();
+        assert!(
+            e.contains("/joint_states")
+                && e.contains("sensor_msgs/msg/JointState")
+                && e.contains("tf:FRAME"),
+            "{e}"
+        );
+        let mut t = topics();
+        t.gripper = "/ee_pose".into();
+        let e = import_ros2(&bag(), &t).unwrap_err().to_string();
+        assert!(
+            e.contains("/ee_pose") && e.contains("geometry_msgs/msg/PoseStamped"),
+            "{e}"
+        );
+        assert!(!e.contains("tf:FRAME"), "{e}");
+    }
+
+    #[test]
+    fn type_names_without_msg_and_bags_without_types_pass() {
+        let t = topics();
+        assert!(t
+            .check_schema("/ee_pose", "geometry_msgs/PoseStamped")
+            .is_ok());
+        assert!(t.check_schema("/ee_pose", "").is_ok());
+        assert!(t.check_schema("/other", "anything/msg/Else").is_ok());
+        assert!(t
+            .check_schema("/tf", "geometry_msgs/msg/PoseStamped")
+            .is_err());
     }
 }
