@@ -37,6 +37,11 @@ impl PoseSource {
             None => PoseSource::Topic(text.to_string()),
         }
     }
+
+    /// Whether this source is the PoseStamped topic `topic`.
+    fn is_topic(&self, topic: &str) -> bool {
+        matches!(self, PoseSource::Topic(t) if t == topic)
+    }
 }
 
 /// Which streams of a bag make up the demonstration.
@@ -70,7 +75,7 @@ impl Ros2Topics {
     fn expected_schemas(&self, topic: &str) -> impl Iterator<Item = &'static str> + '_ {
         let is_pose_topic = std::iter::once(&self.ee)
             .chain(self.objects.iter().map(|(_, source)| source))
-            .any(|source| *source == PoseSource::Topic(topic.to_string()));
+            .any(|source| source.is_topic(topic));
         [
             (topic == "/tf" || topic == "/tf_static", TF_MESSAGE),
             (topic == self.gripper, JOINT_STATE),
@@ -250,7 +255,7 @@ impl Importer<'_> {
             self.gripper = Some(gripper_state(&state, self.topics.closed_below)?);
         }
         for (latest, (_, source)) in self.objects.iter_mut().zip(&self.topics.objects) {
-            if *source == PoseSource::Topic(topic.to_string()) {
+            if source.is_topic(topic) {
                 *latest = Some(stamped_pose(data, &self.tree, &self.topics.frame)?);
             }
         }
@@ -325,10 +330,12 @@ pub fn import_ros2(bytes: &[u8], topics: &Ros2Topics) -> Result<Demo, DemoError>
         let count = counts.entry(topic.to_string()).or_default();
         *count += 1;
         let t = message.log_time as f64 * 1e-9;
-        if let Some(schema) = &message.channel.schema {
-            topics
-                .check_schema(topic, &schema.name)
-                .map_err(DemoError::Format)?;
+        if *count == 1 {
+            if let Some(schema) = &message.channel.schema {
+                topics
+                    .check_schema(topic, &schema.name)
+                    .map_err(DemoError::Format)?;
+            }
         }
         importer
             .take(topic, t, &message.data)
