@@ -1,22 +1,16 @@
 //! The one place where AKL's nalgebra `f64` poses and shapes become rapier3d's glam `f32`
 //! types, and back.
 
+use akl_planner::parry_convert::cylinder_axis;
 use akl_planner::Geometry;
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
-use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, Rotation, Vector};
-use std::f64::consts::FRAC_PI_2;
+use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, Vector};
 
-/// A pose as rapier's single-precision pose.
-pub fn to_sim(p: &Pose) -> SimPose {
-    let t = p.translation.vector;
-    let q = p.rotation.quaternion().coords;
-    SimPose::from_parts(
-        Vector::new(t.x as f32, t.y as f32, t.z as f32),
-        Rotation::from_xyzw(q.x as f32, q.y as f32, q.z as f32, q.w as f32).normalize(),
-    )
-}
+/// A pose as rapier's single-precision pose (rapier's poses are parry3d's, so the planner's
+/// conversion serves both).
+pub use akl_planner::parry_convert::pose as to_sim;
 
 /// A rapier pose as an AKL pose.
 pub fn from_sim(p: &SimPose) -> Pose {
@@ -36,15 +30,6 @@ pub fn from_sim(p: &SimPose) -> Pose {
 /// A rapier vector as an nalgebra vector.
 pub fn vector_from_sim(v: Vector) -> Vector3<f64> {
     Vector3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
-}
-
-/// URDF and AKL cylinders run along z, rapier's along y: the turn that maps y onto z, placed
-/// between the shape's frame and the rapier cylinder.
-fn cylinder_axis() -> Pose {
-    Pose::from_parts(
-        Translation3::identity(),
-        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2),
-    )
 }
 
 /// A collider for a scene object, placed at `origin` (the object frame in its body's frame).

@@ -18,9 +18,9 @@ pub fn pose(p: &Pose) -> ParryPose {
     )
 }
 
-/// URDF and AKL scene cylinders run along z, parry's along y: the turn that maps y onto z,
-/// applied to the shape before its own pose.
-fn cylinder_axis() -> Pose {
+/// URDF and AKL scene cylinders run along z, parry's (and so rapier's) along y: the turn that
+/// maps y onto z, applied to the shape before its own pose.
+pub fn cylinder_axis() -> Pose {
     Pose::from_parts(
         Vector3::zeros().into(),
         UnitQuaternion::from_axis_angle(&Vector3::x_axis(), FRAC_PI_2),
