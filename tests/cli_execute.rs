@@ -2,38 +2,14 @@
 //! randomized trials, reports are reproducible, bad input exits 2, failing trials exit 1, and
 //! the demo writes its four files. The full figures (100 trials per spec) are an ignored test.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Command;
+
+mod common;
+use common::*;
 
 const TASKS: [&str; 3] = ["pick_place", "inspection", "assembly"];
 const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
-
-fn akl_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the akl binary runs")
-}
-
-fn akl(args: &[&str]) -> Output {
-    akl_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o.stdout)))
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn truth(task: &str) -> String {
     format!("tasks/{task}.truth.json")
@@ -277,26 +253,7 @@ fn bad_input_exits_2_and_writes_nothing() {
 /// there and whether it succeeded.
 fn on_terminal(args: &[&str]) -> (String, bool) {
     use std::io::Read;
-    use std::os::fd::{FromRawFd, OwnedFd};
-    let (mut master, mut slave) = (0, 0);
-    // SAFETY: openpty writes two new file descriptors into the pointers given.
-    let rc = unsafe {
-        libc::openpty(
-            &mut master,
-            &mut slave,
-            std::ptr::null_mut(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0, "openpty failed");
-    // SAFETY: both descriptors were just opened and are owned by nobody else.
-    let (mut master, slave) = unsafe {
-        (
-            std::fs::File::from_raw_fd(master),
-            OwnedFd::from_raw_fd(slave),
-        )
-    };
+    let Pty { mut master, slave } = open_pty();
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
     cmd.args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))

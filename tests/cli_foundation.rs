@@ -1,30 +1,7 @@
 //! End-to-end tests of `akl task` and `akl spec` through the binary.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn akl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the akl binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A scratch directory unique to one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::*;
 
 fn truth_text() -> String {
     std::fs::read_to_string(concat!(

@@ -1,42 +1,13 @@
 //! End-to-end tests of `akl robot` and `akl plan` through the binary.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn akl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the akl binary runs")
-}
+mod common;
+use common::*;
 
 /// Runs from a directory without the repository, to show the robot is built in.
 fn akl_elsewhere(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args(args)
-        .current_dir(std::env::temp_dir())
-        .output()
-        .expect("the akl binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
-}
-
-/// A scratch directory unique to one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    akl_in(&std::env::temp_dir(), args)
 }
 
 const READY: &str =

@@ -3,32 +3,12 @@
 //! pseudo-terminal, and recordings that survive SIGKILL and end cleanly on Ctrl-C.
 
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn akl_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the akl binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o.stdout)))
-}
+mod common;
+use common::*;
 
 #[test]
 fn teach_learn_and_score_every_builtin_task() {
@@ -272,36 +252,6 @@ fn a_stream_recorded_without_the_detector_is_replayed_by_learn() {
         &["score", "s.json", "--truth", "inspection", "--json"],
     );
     assert_eq!(json(&o)["success"], true);
-}
-
-/// A pseudo-terminal pair: the child gets the slave as its controlling terminal, so its
-/// `/dev/tty` is the slave; the test reads and types on the master.
-struct Pty {
-    master: std::fs::File,
-    slave: std::os::fd::OwnedFd,
-}
-
-fn open_pty() -> Pty {
-    use std::os::fd::FromRawFd;
-    let (mut master, mut slave) = (0, 0);
-    // SAFETY: openpty writes two new file descriptors into the pointers given.
-    let rc = unsafe {
-        libc::openpty(
-            &mut master,
-            &mut slave,
-            std::ptr::null_mut(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0, "openpty failed");
-    // SAFETY: both descriptors were just opened and are owned by nobody else.
-    unsafe {
-        Pty {
-            master: std::fs::File::from_raw_fd(master),
-            slave: std::os::fd::OwnedFd::from_raw_fd(slave),
-        }
-    }
 }
 
 fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {

@@ -1,0 +1,83 @@
+//! Helpers the end-to-end tests share: running the `akl` binary, reading what it printed,
+//! scratch folders and pseudo-terminals.
+//!
+//! Each test file is its own crate and uses only some of these, hence `dead_code` is allowed.
+#![allow(dead_code)]
+
+use std::os::fd::{FromRawFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `akl args` in `dir` and waits for it.
+pub fn akl_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the akl binary runs")
+}
+
+/// Runs `akl args` at the repository root (where `tasks/` is) and waits for it.
+pub fn akl(args: &[&str]) -> Output {
+    akl_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
+}
+
+/// Bytes a command wrote, as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// What a command wrote on standard output.
+pub fn stdout(o: &Output) -> String {
+    text(&o.stdout)
+}
+
+/// What a command wrote on standard error.
+pub fn stderr(o: &Output) -> String {
+    text(&o.stderr)
+}
+
+/// A command's standard output parsed as JSON; a parse failure shows the output.
+pub fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
+}
+
+/// An empty scratch folder unique to one test of this process.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A pseudo-terminal pair: a child given the slave sees a terminal; the test reads what it
+/// wrote, and types, on the master.
+pub struct Pty {
+    /// The test's end.
+    pub master: std::fs::File,
+    /// The child's end.
+    pub slave: OwnedFd,
+}
+
+/// Opens a new pseudo-terminal pair.
+pub fn open_pty() -> Pty {
+    let (mut master, mut slave) = (0, 0);
+    // SAFETY: openpty writes two new file descriptors into the pointers given.
+    let rc = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0, "openpty failed");
+    // SAFETY: both descriptors were just opened and are owned by nobody else.
+    unsafe {
+        Pty {
+            master: std::fs::File::from_raw_fd(master),
+            slave: OwnedFd::from_raw_fd(slave),
+        }
+    }
+}
