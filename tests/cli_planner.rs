@@ -212,6 +212,20 @@ fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
         "plan",
         "tasks/inspection.truth.json",
         "--task",
+        "inspection",
+        "-o",
+        "no/such/folder/plan.json",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no/such/folder/plan.json: cannot write the plan there"),
+        "{}",
+        stderr(&o)
+    );
+    let o = akl(&[
+        "plan",
+        "tasks/inspection.truth.json",
+        "--task",
         "pick_place",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

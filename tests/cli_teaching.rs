@@ -109,7 +109,7 @@ fn bad_input_is_named_and_exits_2() {
         "{\"akl_demo\": 1, \"task\": \"t\", \"frame\": \"world\"}\n{\"t\": 0.0}\n",
     )
     .unwrap();
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 11] = [
         (&["learn", "bad.jsonl"], "bad.jsonl: line 2"),
         (&["learn", "missing.mcap"], "missing.mcap"),
         (&["learn", "bad.jsonl", "--method", "okl"], "unknown method"),
@@ -143,6 +143,15 @@ fn bad_input_is_named_and_exits_2() {
             "5000 Hz",
         ),
         (&["learn", "bad.jsonl", "--bounds", "0.01"], "--bounds"),
+        (
+            &["learn", "bad.jsonl", "-o", "no/such/folder/s.json"],
+            "no/such/folder/s.json: cannot write the spec there (no such folder)",
+        ),
+        (
+            &["calibrate", "--simulate", "-o", "no/such/folder/c.json"],
+            "no/such/folder/c.json: cannot write the calibration there",
+        ),
+        (&["calibrate", "--simulate", "-o", "."], "is a folder"),
     ];
     for (args, needle) in cases {
         let o = akl_in(&dir, args);

@@ -22,6 +22,7 @@ struct Report {
 }
 
 pub fn run(args: CalibrateArgs) -> CliResult {
+    super::check_output(&args.output, "calibration")?;
     let (line, circle, source) = if args.simulate {
         let profile = super::profile(&args.profile)?;
         let (line, circle) = calibration_demos(&profile, args.seed).map_err(CliError::input)?;

@@ -1,7 +1,7 @@
 //! `akl execute SPEC --task T`, and the execution stage of `akl demo`.
 
-use super::print_json;
 use super::robot::load as load_robot;
+use super::{check_output, print_json};
 use crate::cli::ExecuteArgs;
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
@@ -92,27 +92,6 @@ pub(crate) fn verdict(report: &BatchReport) -> CliResult {
             report.trials
         )))
     }
-}
-
-/// Checks that `path` can be written: its folder exists and it is not a folder itself.
-fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
-    if path.is_dir() {
-        return Err(CliError::input(format!(
-            "{}: is a folder; give the {what} a file name",
-            path.display()
-        )));
-    }
-    let folder = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if path.file_name().is_none() || !folder.is_dir() {
-        return Err(CliError::input(format!(
-            "{}: cannot write the {what} there (no such folder)",
-            path.display()
-        )));
-    }
-    Ok(())
 }
 
 /// Runs the trials of `e`, showing progress, and writes the report and trace.

@@ -28,6 +28,9 @@ struct Learned<'a> {
 pub fn run(args: LearnArgs) -> CliResult {
     let method: Method = args.method.parse().map_err(CliError::input)?;
     let bounds = parse_bounds(&args.bounds)?;
+    if let Some(out) = &args.output {
+        super::check_output(out, "spec")?;
+    }
     let mut demo = read_demo(&args)?;
     let task = match &args.task {
         Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),

@@ -54,6 +54,28 @@ pub(crate) fn load_calibration(path: Option<&Path>) -> Result<(Calibration, Stri
     }
 }
 
+/// Checks, before any work, that an output the user named can be written: its folder exists
+/// and it is not a folder itself (bad input, exit 2, rather than a failure after the work).
+pub(crate) fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
+    if path.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: is a folder; give the {what} a file name",
+            path.display()
+        )));
+    }
+    let folder = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if path.file_name().is_none() || !folder.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: cannot write the {what} there (no such folder)",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Prints a value as pretty JSON on stdout.
 pub(crate) fn print_json<T: serde::Serialize>(value: &T) -> CliResult {
     let text = akl_tsr::io::to_readable_json(value).map_err(crate::exit::CliError::internal)?;

@@ -45,6 +45,9 @@ struct PlanSummary {
 }
 
 pub fn run(args: PlanArgs) -> CliResult {
+    if let Some(out) = &args.output {
+        super::check_output(out, "plan")?;
+    }
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
     let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
