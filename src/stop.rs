@@ -1,4 +1,5 @@
-//! Ctrl-C ends a recording cleanly instead of killing the process mid-write.
+//! How akl stops on a signal: Ctrl-C ends a recording cleanly instead of killing the process
+//! mid-write, and a reader that goes away (`akl ... | head`) ends it quietly.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -15,4 +16,13 @@ pub fn on_ctrl_c() -> &'static AtomicBool {
         }
     });
     &STOP
+}
+
+/// Lets a closed output pipe end the process silently, as it does for other command-line
+/// tools, instead of turning the failed write into a panic. Rust ignores SIGPIPE by default.
+pub fn end_quietly_on_closed_pipe() {
+    // SAFETY: restoring a signal's default disposition at start-up, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }

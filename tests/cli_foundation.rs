@@ -135,3 +135,22 @@ fn a_missing_spec_file_is_bad_input() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("no/such/spec.json"));
 }
+
+#[test]
+fn a_reader_that_went_away_ends_akl_quietly() {
+    use std::os::fd::{FromRawFd, OwnedFd};
+    use std::os::unix::process::ExitStatusExt;
+    let mut fds = [0; 2];
+    // SAFETY: pipe writes two new file descriptors into the array given.
+    assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0, "pipe failed");
+    // SAFETY: both descriptors were just opened and are owned by nobody else.
+    let (reader, writer) = unsafe { (OwnedFd::from_raw_fd(fds[0]), OwnedFd::from_raw_fd(fds[1])) };
+    drop(reader);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(["task", "list"])
+        .stdout(writer)
+        .output()
+        .expect("the akl binary runs");
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    assert_eq!(o.status.signal(), Some(libc::SIGPIPE), "{:?}", o.status);
+}
