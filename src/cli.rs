@@ -175,14 +175,48 @@ pub struct ExecuteArgs {
     /// link transforms over time, objects, keyframe TSRs, lines and events.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
+    /// Which trial `--trace` writes (default: the first that failed, else the first).
+    #[arg(long, value_name = "N", requires = "trace")]
+    pub trace_trial: Option<usize>,
     /// Write the full report (every trial's checks) as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Perception error of the movable objects' poses that the planner sees: standard
+    /// deviations in millimetres (along world x and y) and degrees (about the vertical);
+    /// `0,0` plans on the true poses.
+    #[arg(long, value_name = "MM,DEG", default_value = "2,1", value_parser = parse_pose_noise)]
+    pub pose_noise: PoseNoiseArg,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the full report as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--pose-noise MM,DEG`: standard deviations of perceived position (mm) and yaw (degrees).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseNoiseArg {
+    /// Millimetres.
+    pub millimetres: f64,
+    /// Degrees.
+    pub degrees: f64,
+}
+
+fn parse_pose_noise(text: &str) -> Result<PoseNoiseArg, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [mm, deg] = parts[..] else {
+        return Err(format!("expected MM,DEG (e.g. 2,1), got `{text}`"));
+    };
+    let number = |s: &str, what: &str| -> Result<f64, String> {
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+            _ => Err(format!("{what} must be a number >= 0, got `{s}`")),
+        }
+    };
+    Ok(PoseNoiseArg {
+        millimetres: number(mm, "millimetres")?,
+        degrees: number(deg, "degrees")?,
+    })
 }
 
 /// `akl demo`

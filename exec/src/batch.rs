@@ -109,11 +109,18 @@ impl<'a> Batch<'a> {
         (report, timeline)
     }
 
-    /// Runs again the trial of `report` (this batch's report) that a trace should show (see
-    /// [`trial_to_trace`]), recording it at [`TRACE_RATE`], and writes it as an MCAP trace to
-    /// `path`. Returns that trial's index.
-    pub fn write_trace(&self, report: &BatchReport, path: &Path) -> Result<usize, ExecError> {
-        let i = trial_to_trace(report).min(self.worlds.len() - 1);
+    /// Runs again trial `trial` of this batch, or the trial of `report` (this batch's report)
+    /// that a trace should show by default (see [`trial_to_trace`]), recording it at
+    /// [`TRACE_RATE`], and writes it as an MCAP trace to `path`. Returns that trial's index.
+    pub fn write_trace(
+        &self,
+        report: &BatchReport,
+        trial: Option<usize>,
+        path: &Path,
+    ) -> Result<usize, ExecError> {
+        let i = trial
+            .unwrap_or_else(|| trial_to_trace(report))
+            .min(self.worlds.len() - 1);
         let (trial, timeline) = self.record(i, TRACE_RATE);
         let input = TraceInput {
             robot: self.setup.robot,

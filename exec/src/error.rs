@@ -9,6 +9,10 @@ pub enum ExecError {
     /// The robot could not be loaded.
     #[error("robot: {0}")]
     Robot(#[from] akl_planner::RobotError),
+    /// The robot cannot be built in the simulation (no fixed base, no two-finger gripper, a
+    /// joint that is neither an arm nor a finger joint).
+    #[error("robot model: {0}")]
+    RobotModel(String),
     /// The spec does not fit the task (e.g. a reference object the task does not have).
     #[error("spec: {0}")]
     Spec(#[from] akl_tsr::SpecError),

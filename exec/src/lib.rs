@@ -1,13 +1,17 @@
-//! Verified execution of AKL task specs in rapier3d.
+//! Verified execution of AKL task specs: the spec is planned on a perceived world and its plan
+//! simulated in the true one (rapier3d), and every check reads the simulated bodies.
 
 pub mod arm;
 pub mod batch;
+pub mod checks;
 pub mod contacts;
 pub mod convert;
 pub mod error;
 pub mod grasp;
+pub mod hand;
+pub mod perception;
 pub mod report;
+pub mod simulate;
 pub mod trace;
 pub mod trial;
-pub mod verify;
 pub mod world;

@@ -1,7 +1,7 @@
 //! What execution found: one [`TrialReport`] per trial and a [`BatchReport`] over a batch,
 //! both serializable to `report.json`.
 
-use crate::contacts::Collision;
+use crate::contacts::{Collision, Extreme};
 use akl_scene::GoalCheck;
 use akl_tsr::PoseJson;
 use serde::Serialize;
@@ -12,34 +12,59 @@ use std::path::Path;
 /// The `akl_report` version this build writes.
 pub const REPORT_VERSION: u32 = 1;
 
+/// The stage of a trial a failure belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// The planner could not produce a plan on the perceived world.
+    Planning,
+    /// The simulated execution of the plan failed a check.
+    Simulation,
+}
+
 /// Why a trial failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Cause {
-    /// A keyframe's TSR has no pose the arm can reach.
+    /// Planning: a keyframe's TSR has no pose the arm can reach.
     Unreachable,
-    /// The planner found no plan (budget exhausted, a line it cannot follow, a bad start).
+    /// Planning: the planner found no plan (budget exhausted, a line it cannot follow, a bad
+    /// start).
     NoPlan,
-    /// The arm or the held object touched something the step does not manipulate, in the
-    /// simulation or, when every way to reach a keyframe would, already in planning.
+    /// Planning: poses of a keyframe are reachable, but every IK solution (or its approach)
+    /// would make the arm or the held object touch something.
+    NoCollisionFreeGoal,
+    /// Simulation: the arm or the held object touched something the step does not
+    /// manipulate, or an allowed contact went too deep or pushed too hard.
     Collision,
-    /// The gripper closed on nothing, or on another object than the planned one.
+    /// Simulation: the pads closed on nothing, on another object than the spec's, on two
+    /// objects, or unsoundly (off the pads' mid-plane, too little pad overlap).
     GraspFailed,
-    /// The TCP was not within a keyframe's TSR grounded on its reference's current pose.
+    /// Simulation: the held object moved in the hand by more than the slip limit.
+    Slipped,
+    /// Simulation: a released object fell further than the drop limit.
+    Dropped,
+    /// Simulation: the simulated TCP was not within a keyframe's TSR grounded on its
+    /// reference's simulated pose.
     KeyframeMissed,
-    /// The TCP left a `move_in_line` segment's line by more than the tolerance.
+    /// Simulation: the simulated TCP left a `move_in_line` segment's line by more than the
+    /// tolerance.
     LineDeviation,
-    /// A goal predicate of the task does not hold after settling, or an object is not at rest.
+    /// Simulation: a goal predicate of the task does not hold after settling, an object is
+    /// still moving, or an object was never released.
     GoalNotMet,
 }
 
 impl Cause {
     /// Every cause, in report order.
-    pub const ALL: [Cause; 7] = [
+    pub const ALL: [Cause; 10] = [
         Cause::Unreachable,
         Cause::NoPlan,
+        Cause::NoCollisionFreeGoal,
         Cause::Collision,
         Cause::GraspFailed,
+        Cause::Slipped,
+        Cause::Dropped,
         Cause::KeyframeMissed,
         Cause::LineDeviation,
         Cause::GoalNotMet,
@@ -50,11 +75,22 @@ impl Cause {
         match self {
             Cause::Unreachable => "unreachable",
             Cause::NoPlan => "no plan",
+            Cause::NoCollisionFreeGoal => "no collision-free goal",
             Cause::Collision => "collision",
             Cause::GraspFailed => "grasp failed",
+            Cause::Slipped => "slipped",
+            Cause::Dropped => "dropped",
             Cause::KeyframeMissed => "keyframe missed",
             Cause::LineDeviation => "line deviation",
             Cause::GoalNotMet => "goal not met",
+        }
+    }
+
+    /// The stage the cause belongs to.
+    pub fn stage(&self) -> Stage {
+        match self {
+            Cause::Unreachable | Cause::NoPlan | Cause::NoCollisionFreeGoal => Stage::Planning,
+            _ => Stage::Simulation,
         }
     }
 }
@@ -112,17 +148,55 @@ pub struct LineCheck {
     pub within: bool,
 }
 
-/// The outcome of closing the gripper.
+/// The outcome of closing the gripper, measured on the simulated hand and object.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GraspCheck {
     /// The keyframe of the grasp.
     pub keyframe: usize,
-    /// When the fingers had closed (simulated seconds).
+    /// When the pads stopped, or the closing ended (simulated seconds).
     pub t: f64,
-    /// The object the plan grasps.
+    /// The object the spec closes on.
     pub planned: String,
-    /// The object between the fingers, if any.
+    /// The object both pads closed on, if they closed on one.
     pub grasped: Option<String>,
+    /// What each pad touched.
+    pub pads: [Option<String>; 2],
+    /// Distance of the object's centre from the point between the pads (metres).
+    pub offset_from_pads: Option<f64>,
+    /// Distance of the object's centre from the pads' mid-plane (metres).
+    pub centre_offset: Option<f64>,
+    /// The smaller share of a pad's face the object covers (0–1).
+    pub overlap: Option<f64>,
+    /// Whether the grasp was sound and the object carried.
+    pub held: bool,
+    /// Largest displacement of the object in the hand until it was let go (metres).
+    pub slip: f64,
+    /// Largest force along the pads' faces the grasp carried (N).
+    pub peak_load: f64,
+    /// When the load exceeded what friction holds, if it did.
+    pub broke_at: Option<f64>,
+}
+
+/// An object let go of, and how far it fell.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReleaseCheck {
+    /// The opening keyframe.
+    pub keyframe: usize,
+    /// The object.
+    pub object: String,
+    /// When (simulated seconds).
+    pub t: f64,
+    /// Height of its bottom when let go above where it came to rest (metres).
+    pub fall: f64,
+}
+
+/// How closely the simulated TCP followed the planned one.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Tracking {
+    /// Largest distance (metres).
+    pub max: f64,
+    /// Root mean square distance (metres).
+    pub rms: f64,
 }
 
 /// Everything one trial checked, and whether it passed.
@@ -136,8 +210,10 @@ pub struct TrialReport {
     pub passed: bool,
     /// The checks that failed.
     pub failures: Vec<Failure>,
-    /// Where the randomized objects were placed (world poses).
+    /// Where the randomized objects truly were (world poses): the simulation's placements.
     pub placements: BTreeMap<String, PoseJson>,
+    /// Where perception saw the movable objects (world poses): what the planner planned on.
+    pub perceived: BTreeMap<String, PoseJson>,
     /// Wall-clock seconds spent planning.
     pub plan_seconds: f64,
     /// Wall-clock seconds spent simulating.
@@ -150,8 +226,16 @@ pub struct TrialReport {
     pub lines: Vec<LineCheck>,
     /// One check per grasp.
     pub grasps: Vec<GraspCheck>,
+    /// One check per object let go of.
+    pub releases: Vec<ReleaseCheck>,
     /// Contacts that should not have happened.
     pub collisions: Vec<Collision>,
+    /// Deepest contact of the arm or the held object.
+    pub deepest_contact: Extreme,
+    /// Largest force of a contact of the arm or the held object.
+    pub largest_force: Extreme,
+    /// How closely the simulated TCP followed the plan.
+    pub tracking: Tracking,
     /// The task's goal predicates and the rest check, after settling.
     pub goals: Vec<GoalCheck>,
 }
@@ -282,6 +366,7 @@ mod tests {
                 })
                 .collect(),
             placements: BTreeMap::new(),
+            perceived: BTreeMap::new(),
             plan_seconds: 0.1,
             sim_seconds: 0.3,
             simulated_seconds: 10.0,
@@ -299,7 +384,11 @@ mod tests {
                 .into_iter()
                 .collect(),
             grasps: Vec::new(),
+            releases: Vec::new(),
             collisions: Vec::new(),
+            deepest_contact: Default::default(),
+            largest_force: Default::default(),
+            tracking: Tracking::default(),
             goals: Vec::new(),
         }
     }

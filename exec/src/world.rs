@@ -7,8 +7,7 @@ use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use rapier3d::prelude::{
     ActiveCollisionTypes, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
-    PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SolverFlags,
-    Vector,
+    PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, Vector,
 };
 
 /// Collision group of furniture (fixed objects).
@@ -82,42 +81,6 @@ pub struct SimObject {
     pub collider: ColliderHandle,
 }
 
-/// Lets the hand pass through the objects it may touch (the one it grasps or releases): their
-/// contacts are still computed, so they are seen, but not solved.
-///
-/// The hand's collision geometry is a few coarse capsules; at a grasp they reach into the
-/// object, where the real hand's fingers slide along its sides. Solving those contacts would
-/// fling the object away before the fingers close; contacts with anything else are solved.
-#[derive(Debug, Clone, Default)]
-struct HandPass {
-    /// Which robot links (by index) are hand links.
-    hand_links: Vec<bool>,
-    /// Objects the hand passes through now.
-    objects: Vec<usize>,
-}
-
-impl PhysicsHooks for HandPass {
-    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
-        let owner = |c| {
-            context
-                .colliders
-                .get(c)
-                .map(|c| Owner::from_user_data(c.user_data))
-        };
-        let passes = match (owner(context.collider1)?, owner(context.collider2)?) {
-            (Owner::Link(l), Owner::Object(o)) | (Owner::Object(o), Owner::Link(l)) => {
-                self.hand_links.get(l).copied().unwrap_or(false) && self.objects.contains(&o)
-            }
-            _ => false,
-        };
-        Some(if passes {
-            SolverFlags::empty()
-        } else {
-            SolverFlags::COMPUTE_RIGID_IMPULSES
-        })
-    }
-}
-
 /// A rapier world built from an AKL [`World`].
 pub struct SimWorld {
     /// The rapier state; exposed so the arm, grasp and contact modules can reach its parts.
@@ -125,7 +88,6 @@ pub struct SimWorld {
     /// The scene objects, in the task's order.
     pub objects: Vec<SimObject>,
     template: World,
-    hand_pass: HandPass,
     time: f64,
     dt: f64,
 }
@@ -190,7 +152,6 @@ impl SimWorld {
             physics,
             objects,
             template: world.clone(),
-            hand_pass: HandPass::default(),
             time: 0.0,
             dt: settings.dt,
         }
@@ -198,22 +159,8 @@ impl SimWorld {
 
     /// Advances the simulation by one time step.
     pub fn step(&mut self) {
-        self.physics.step_with_events(&self.hand_pass, &());
+        self.physics.step();
         self.time += self.dt;
-    }
-
-    /// Declares which robot links (by index) are hand links; their colliders must have
-    /// `ActiveHooks::FILTER_CONTACT_PAIRS` for [`SimWorld::set_hand_passes`] to apply.
-    pub fn set_hand_links(&mut self, hand_links: Vec<bool>) {
-        self.hand_pass.hand_links = hand_links;
-    }
-
-    /// The objects (by index) the hand passes through from the next step on: contacts with
-    /// them are computed but not solved.
-    pub fn set_hand_passes(&mut self, objects: &[usize]) {
-        if self.hand_pass.objects != objects {
-            self.hand_pass.objects = objects.to_vec();
-        }
     }
 
     /// Simulated time since the start (seconds).

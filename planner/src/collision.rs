@@ -16,6 +16,7 @@
 //! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
 //! joints beyond j move the point.
 
+use crate::contact_rules::{self, LinkRole};
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::parry_convert;
@@ -131,6 +132,7 @@ pub struct Held {
     /// The object's pose in the TCP frame.
     pub in_tcp: Pose,
     grown: SharedShape,
+    exact: SharedShape,
     local: Pose,
     margin: f64,
     /// Radius of a ball about the object's centre that holds the object itself.
@@ -334,12 +336,14 @@ impl Held {
     /// An object of `shape` held with pose `in_tcp` in the TCP frame, grown by `margin`.
     pub fn new(name: &str, shape: Shape, in_tcp: Pose, margin: f64) -> Held {
         let (grown, local) = parry_convert::object_shape(&shape, margin);
+        let (exact, _) = parry_convert::object_shape(&shape, 0.0);
         let core = shape.half_extents().norm();
         Held {
             name: name.to_string(),
             shape,
             in_tcp,
             grown,
+            exact,
             local,
             margin,
             core,
@@ -756,11 +760,12 @@ impl<'a> Checker<'a> {
                 };
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
             let bounds = bounding_box(p, b.world_radius);
-            for (index, o) in self.scene.obstacles.iter().enumerate() {
-                if Some(index) == self.scene.mount && model.mount_links.contains(&b.link) {
-                    continue;
-                }
-                if b.group == Group::Hand && allow.hand_may_touch.contains(&o.name) {
+            let role = LinkRole {
+                hand: b.group == Group::Hand,
+                mount: model.mount_links.contains(&b.link),
+            };
+            for o in &self.scene.obstacles {
+                if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;
                 }
                 if !clear_of(&b.world_shape, p, &bounds, o, proof.as_mut(), moved, slack) {
@@ -782,7 +787,14 @@ impl<'a> Checker<'a> {
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(held_chain, 0));
             let bounds = bounding_box(&ball, extent);
             for o in &self.scene.obstacles {
-                if allow.held_may_touch.contains(&o.name) {
+                if contact_rules::held_may_touch(&o.name, allow) {
+                    // It may rest on it, not press into it (checked where tested, not proved
+                    // over edges: pressing in is deepest where a placement ends).
+                    let exact = poses[model.tcp] * h.in_tcp * h.local;
+                    let depth = parry_convert::penetration(&h.exact, &exact, &o.shape, &o.pose);
+                    if depth.is_some_and(|d| d > contact_rules::PRESS_DEPTH) {
+                        return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
+                    }
                     continue;
                 }
                 let slack = 0.5 * h.margin;

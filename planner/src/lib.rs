@@ -9,6 +9,7 @@
 pub mod check;
 pub mod collision;
 pub mod config;
+pub mod contact_rules;
 pub mod error;
 pub mod fk;
 pub mod geometry;

@@ -96,3 +96,11 @@ pub fn distance(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Optio
         .ok()
         .map(|d| f64::from(d.distance).max(0.0))
 }
+
+/// How deep two parry shapes at the given (f64) poses interpenetrate (metres; 0 when apart or
+/// touching); `None` if parry has no contact query for the pair.
+pub fn penetration(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
+    parry3d::query::contact(&pose(pa), a.as_ref(), &pose(pb), b.as_ref(), 0.0)
+        .ok()
+        .map(|c| c.map_or(0.0, |c| f64::from(-c.dist).max(0.0)))
+}

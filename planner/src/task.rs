@@ -208,6 +208,16 @@ fn grasp_width(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
     }
 }
 
+/// Where an object grasped with the TCP at `tcp` sits in the TCP frame once the fingers have
+/// closed on it: a parallel gripper pushes what it closes on to the middle between its fingers,
+/// so the object's centre ends on the closing axis's midpoint (TCP y = 0), whatever error its
+/// perceived pose had along that axis.
+fn centred_in_hand(tcp: &Pose, object: &Pose) -> Pose {
+    let mut in_tcp = tcp.inverse() * object;
+    in_tcp.translation.vector.y = 0.0;
+    in_tcp
+}
+
 fn line_error(segment: String, failure: &LineFailure) -> PlanError {
     PlanError::Line {
         segment,
@@ -643,7 +653,7 @@ impl<'a> Planner<'a> {
                 let held = Held::new(
                     object,
                     o.shape,
-                    pose.inverse() * o.pose,
+                    centred_in_hand(pose, &o.pose),
                     self.model.margins().held,
                 );
                 let width = grasp_width(&o.shape, &o.pose, pose).min(self.robot.open_width());
@@ -712,7 +722,7 @@ impl<'a> Planner<'a> {
                 held: Held::new(
                     object,
                     o.shape,
-                    pose.inverse() * o.pose,
+                    centred_in_hand(pose, &o.pose),
                     self.model.margins().held,
                 ),
                 resting_on: world.support_of(object).map(|s| s.name.clone()),
@@ -817,7 +827,7 @@ impl<'a> Planner<'a> {
             });
         }
         let support = self.world.support_of(object).map(|s| s.name.clone());
-        let in_tcp = tcp.inverse() * o.pose;
+        let in_tcp = centred_in_hand(&tcp, &o.pose);
         self.events.push(GripperEvent {
             t: self.t,
             action: GripperAction::Close,
@@ -833,9 +843,14 @@ impl<'a> Planner<'a> {
         });
         let resting = Allowances {
             hand_may_touch: Vec::new(),
-            held_may_touch: support.into_iter().collect(),
+            held_may_touch: support.iter().cloned().collect(),
         };
-        self.gripper_segment(i, width, resting.clone());
+        let closing = crate::contact_rules::Step {
+            grasping: Some(object),
+            resting_on: support.as_deref(),
+            ..Default::default()
+        };
+        self.gripper_segment(i, width, closing.allowances());
         if next_line {
             return Ok(());
         }
@@ -972,11 +987,19 @@ impl<'a> Planner<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::check::{recheck, RecheckOptions};
-    use crate::robot::{PANDA_TOML, PANDA_URDF};
-    use akl_scene::{builtin, randomize, Object};
-    use proptest::prelude::*;
-    use std::path::Path;
+
+    #[test]
+    fn a_grasped_object_ends_centred_between_the_fingers() {
+        use akl_tsr::pose::{pose_from_xyz_rpy, rotation_distance};
+        let tcp = pose_from_xyz_rpy([0.5, 0.0, 0.1], [std::f64::consts::PI, 0.0, 0.3]);
+        let seen = pose_from_xyz_rpy([0.503, 0.002, 0.06], [0.0, 0.0, 0.03]);
+        let held = centred_in_hand(&tcp, &seen);
+        let plain = tcp.inverse() * seen;
+        assert!(held.translation.y.abs() < 1e-12 && plain.translation.y.abs() > 1e-3);
+        assert!((held.translation.x - plain.translation.x).abs() < 1e-12);
+        assert!((held.translation.z - plain.translation.z).abs() < 1e-12);
+        assert!(rotation_distance(&held, &plain) < 1e-12);
+    }
 
     fn options(seed: u64) -> PlanOptions {
         PlanOptions {

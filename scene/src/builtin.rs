@@ -241,7 +241,7 @@ mod tests {
         };
         let clearance = 0.5 * (gap - pipe);
         assert!(
-            clearance > 0.001 && clearance < 0.005,
+            clearance > 0.005 && clearance < 0.007,
             "clearance {clearance}"
         );
     }

@@ -10,6 +10,7 @@ use super::teach::{
 use crate::cli::{DemoArgs, RobotArg};
 use crate::exit::{CliError, CliResult};
 use crate::table::Table;
+use akl_exec::trial::ExecOptions;
 use akl_learn::calibration::Calibration;
 use akl_learn::measures::{score, Tolerance};
 use akl_scene::builtin;
@@ -94,6 +95,8 @@ pub fn run(args: DemoArgs) -> CliResult {
         seed: args.seed,
         jobs: args.jobs,
         trace: Some(&trace_path),
+        trace_trial: None,
+        options: ExecOptions::default(),
         report: Some(&report_path),
     })?;
     print_executed(&executed);

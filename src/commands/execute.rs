@@ -8,6 +8,7 @@ use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::error::ExecError;
+use akl_exec::perception::PoseNoise;
 use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
@@ -37,6 +38,10 @@ pub(crate) struct Execution<'a> {
     pub jobs: Option<usize>,
     /// Where to write the trace.
     pub trace: Option<&'a Path>,
+    /// Which trial the trace shows (`None`: the first that failed, else the first).
+    pub trace_trial: Option<usize>,
+    /// Settings of execution.
+    pub options: ExecOptions,
     /// Where to write the report.
     pub report: Option<&'a Path>,
 }
@@ -70,6 +75,14 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         seed: args.seed,
         jobs: args.jobs,
         trace: args.trace.as_deref(),
+        trace_trial: args.trace_trial,
+        options: ExecOptions {
+            noise: PoseNoise {
+                position: args.pose_noise.millimetres * 1e-3,
+                yaw: args.pose_noise.degrees.to_radians(),
+            },
+            ..ExecOptions::default()
+        },
         report: args.report.as_deref(),
     })?;
     if args.json {
@@ -118,15 +131,23 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
         seed: e.seed,
         jobs: jobs.min(trials),
     };
-    let exec = ExecOptions::default();
-    let batch = Batch::new(e.robot, e.task, e.spec, &exec, options).map_err(|err| match err {
-        ExecError::Spec(source) => CliError::input(FileError {
-            path: e.spec_path.to_path_buf(),
-            source,
-        }),
-        ExecError::Scene(source) => CliError::input(format!("task `{}`: {source}", e.task.name)),
-        other => CliError::input(other),
-    })?;
+    if let Some(i) = e.trace_trial.filter(|&i| i >= trials) {
+        return Err(CliError::input(format!(
+            "--trace-trial {i}: there are only {trials} trials (0 to {})",
+            trials - 1
+        )));
+    }
+    let batch =
+        Batch::new(e.robot, e.task, e.spec, &e.options, options).map_err(|err| match err {
+            ExecError::Spec(source) => CliError::input(FileError {
+                path: e.spec_path.to_path_buf(),
+                source,
+            }),
+            ExecError::Scene(source) => {
+                CliError::input(format!("task `{}`: {source}", e.task.name))
+            }
+            other => CliError::input(other),
+        })?;
     let progress = Progress::new(&format!("executing on `{}`", e.task.name), trials);
     let report = batch
         .run(&|r| progress.tick(r.passed))
@@ -140,7 +161,11 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
             .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
     }
     let trace_trial = match e.trace {
-        Some(p) => Some(batch.write_trace(&report, p).map_err(CliError::internal)?),
+        Some(p) => Some(
+            batch
+                .write_trace(&report, e.trace_trial, p)
+                .map_err(CliError::internal)?,
+        ),
         None => None,
     };
     Ok(Executed {

@@ -1,0 +1,13 @@
+//! Collision check: the contact verdicts gathered during the run (see [`crate::contacts`]).
+
+use super::failure;
+use crate::contacts::Collision;
+use crate::report::{Cause, Failure};
+
+/// A failure for each pair that collided.
+pub fn check(collisions: &[Collision]) -> Vec<Failure> {
+    collisions
+        .iter()
+        .map(|c| failure(Cause::Collision, c.describe()))
+        .collect()
+}

@@ -1,0 +1,72 @@
+//! Line check: over each `move_in_line` segment the simulated TCP stays within the tolerance
+//! of the straight line between where it started and where it ended.
+
+use super::failure;
+use crate::report::Cause;
+use crate::report::{Failure, LineCheck};
+use crate::simulate::observations::LinePath;
+use akl_planner::line::distance_to_segment;
+
+/// One check per line; a failure for each that strayed further than `tolerance` (metres).
+pub fn check(lines: &[LinePath], tolerance: f64) -> (Vec<LineCheck>, Vec<Failure>) {
+    let mut checks = Vec::with_capacity(lines.len());
+    let mut failures = Vec::new();
+    for line in lines {
+        let (Some(from), Some(to)) = (line.points.first(), line.points.last()) else {
+            continue;
+        };
+        let deviation = line
+            .points
+            .iter()
+            .map(|p| distance_to_segment(p, from, to))
+            .fold(0.0, f64::max);
+        let within = deviation <= tolerance;
+        if !within {
+            failures.push(failure(
+                Cause::LineDeviation,
+                format!(
+                    "line to keyframe {}: the simulated TCP strays {:.1} mm from the line (tolerance {:.1} mm)",
+                    line.keyframe,
+                    deviation * 1e3,
+                    tolerance * 1e3
+                ),
+            ));
+        }
+        checks.push(LineCheck {
+            keyframe: line.keyframe,
+            start: line.start,
+            end: line.end,
+            from: [from.x, from.y, from.z],
+            to: [to.x, to.y, to.z],
+            deviation,
+            within,
+        });
+    }
+    (checks, failures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_tsr::nalgebra::Vector3;
+
+    #[test]
+    fn a_line_check_reports_the_largest_deviation_of_the_path() {
+        let path = LinePath {
+            keyframe: 2,
+            start: 0.0,
+            end: 1.0,
+            points: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(0.5, 0.004, 0.0),
+                Vector3::new(0.7, 0.0, 0.006),
+                Vector3::new(1.0, 0.0, 0.0),
+            ],
+        };
+        let (checks, failures) = check(std::slice::from_ref(&path), 0.005);
+        assert!((checks[0].deviation - 0.006).abs() < 1e-12 && !checks[0].within);
+        assert_eq!(failures[0].cause, Cause::LineDeviation);
+        let (checks, failures) = check(&[path], 0.007);
+        assert!(checks[0].within && failures.is_empty());
+    }
+}

@@ -1,0 +1,193 @@
+//! The gripper's physical model in the simulation: the palm and the two finger pads.
+//!
+//! The planner's hand model is deliberately coarse and fills the space between the fingers, so
+//! that planning keeps that space free. The simulation needs the hand as it is: a palm that
+//! ends where the fingers are mounted, and two flat pads that close on what is between them.
+//! Both are derived from the URDF, so another two-finger robot works the same way:
+//! - each pad is the bounding box of its finger's URDF shapes (for the Panda, 20 × 20 × 50 mm
+//!   with its inner face on the finger's inner side);
+//! - the palm is the bounding box of the hand link's URDF shapes, cut at the plane where the
+//!   finger joints sit (for the Panda, 58.4 mm below the flange).
+
+use crate::convert::link_collider;
+use akl_planner::fk::Motion;
+use akl_planner::{Geometry, Robot};
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
+
+/// An axis-aligned box in some frame: its centre and half extents.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalBox {
+    /// Centre in the frame.
+    pub centre: Vector3<f64>,
+    /// Half extents along the frame's axes.
+    pub half: Vector3<f64>,
+}
+
+impl LocalBox {
+    fn from_bounds(lo: Vector3<f64>, hi: Vector3<f64>) -> LocalBox {
+        LocalBox {
+            centre: 0.5 * (lo + hi),
+            half: 0.5 * (hi - lo),
+        }
+    }
+
+    /// The box as a collision geometry placed in the frame.
+    pub fn geometry(&self) -> (Geometry, Pose) {
+        (
+            Geometry::Box {
+                size: [2.0 * self.half.x, 2.0 * self.half.y, 2.0 * self.half.z],
+            },
+            Pose::translation(self.centre.x, self.centre.y, self.centre.z),
+        )
+    }
+}
+
+/// The bounds, in the link frame, of a set of URDF shapes.
+fn bounds(shapes: &[(Geometry, Pose)]) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for (geometry, origin) in shapes {
+        let aabb = link_collider(geometry, origin).build().compute_aabb();
+        for k in 0..3 {
+            lo[k] = lo[k].min(f64::from(aabb.mins[k]));
+            hi[k] = hi[k].max(f64::from(aabb.maxs[k]));
+        }
+    }
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
+/// One finger: its link, its pad in the link frame, and which way its pad faces.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Finger {
+    /// Robot link index.
+    pub link: usize,
+    /// The pad, in the finger link's frame.
+    pub pad: LocalBox,
+    /// Unit direction (finger link frame) from this pad towards the other.
+    pub inward: Vector3<f64>,
+}
+
+impl Finger {
+    /// Centre of the pad's inner face, in the finger link's frame.
+    pub fn face_centre(&self) -> Vector3<f64> {
+        let along = self.pad.half.dot(&self.inward.abs());
+        self.pad.centre + along * self.inward
+    }
+}
+
+/// The simulated hand: palm and pads, derived from the robot's URDF.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HandModel {
+    /// The two fingers.
+    pub fingers: [Finger; 2],
+    /// Robot link index of the link the fingers are mounted on (the hand).
+    pub palm_link: usize,
+    /// The palm, in the hand link's frame.
+    pub palm: Option<LocalBox>,
+}
+
+impl HandModel {
+    /// The hand of `robot`, or `None` when it has no two prismatic fingers on one link.
+    pub fn new(robot: &Robot) -> Option<HandModel> {
+        let links = robot.links();
+        let finger_links: Vec<usize> = (0..links.len())
+            .filter(|&i| robot.finger_joints().contains(&links[i].joint))
+            .collect();
+        let [a, b] = finger_links[..] else {
+            return None;
+        };
+        let palm_link = links[a].parent?;
+        if links[b].parent != Some(palm_link) {
+            return None;
+        }
+        let shapes = |i: usize| -> Vec<(Geometry, Pose)> {
+            links[i]
+                .shapes
+                .iter()
+                .map(|s| (s.geometry, s.origin))
+                .collect()
+        };
+        let pad = |i: usize| bounds(&shapes(i)).map(|(lo, hi)| LocalBox::from_bounds(lo, hi));
+        let (pad_a, pad_b) = (pad(a)?, pad(b)?);
+        // The fingers at full opening, in the palm's frame, to find which way each faces.
+        let open = robot.open_width();
+        let poses = robot.link_poses(robot.ready(), open);
+        let in_palm = |i: usize| poses[palm_link].inverse() * poses[i];
+        let centre_a = in_palm(a) * akl_tsr::nalgebra::Point3::from(pad_a.centre);
+        let centre_b = in_palm(b) * akl_tsr::nalgebra::Point3::from(pad_b.centre);
+        let axis = |i: usize| match links[i].motion {
+            Motion::Prismatic { axis, .. } => Some(links[i].origin.rotation * axis.into_inner()),
+            _ => None,
+        };
+        let closing = axis(a)?;
+        let inward = |i: usize,
+                      from: &akl_tsr::nalgebra::Point3<f64>,
+                      to: &akl_tsr::nalgebra::Point3<f64>| {
+            let d = (to - from).dot(&closing).signum() * closing;
+            in_palm(i).rotation.inverse() * d
+        };
+        let fingers = [
+            Finger {
+                link: a,
+                pad: pad_a,
+                inward: inward(a, &centre_a, &centre_b),
+            },
+            Finger {
+                link: b,
+                pad: pad_b,
+                inward: inward(b, &centre_b, &centre_a),
+            },
+        ];
+        // The palm ends at the plane of the finger joints.
+        let mount = links[a].origin.translation.vector;
+        let out = mount.iamax();
+        let sign = mount[out].signum();
+        let palm = bounds(&shapes(palm_link)).and_then(|(mut lo, mut hi)| {
+            if sign > 0.0 {
+                hi[out] = hi[out].min(mount[out]);
+            } else {
+                lo[out] = lo[out].max(mount[out]);
+            }
+            (lo[out] < hi[out]).then(|| LocalBox::from_bounds(lo, hi))
+        });
+        Some(HandModel {
+            fingers,
+            palm_link,
+            palm,
+        })
+    }
+
+    /// The finger with robot link index `link`.
+    pub fn finger(&self, link: usize) -> Option<&Finger> {
+        self.fingers.iter().find(|f| f.link == link)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_panda_pads_face_each_other_and_the_palm_stops_at_the_fingers() {
+        let robot = Robot::panda().unwrap();
+        let hand = HandModel::new(&robot).unwrap();
+        for f in &hand.fingers {
+            assert!(
+                (f.pad.half - Vector3::new(0.01, 0.01, 0.025)).norm() < 1e-5,
+                "{f:?}"
+            );
+            assert!(f.inward.norm() > 0.999);
+            // The inner face lies on the finger joint's axis line (the URDF finger's inner side).
+            assert!(f.face_centre().y.abs() < 1e-5, "{:?}", f.face_centre());
+        }
+        assert!(hand.fingers[0].inward.dot(&Vector3::y()) < -0.99);
+        assert!(hand.fingers[1].inward.dot(&Vector3::y()) > 0.99);
+        let palm = hand.palm.unwrap();
+        assert!(
+            (palm.centre.z + palm.half.z - 0.0584).abs() < 1e-5,
+            "{palm:?}"
+        );
+        assert!(palm.half.y > 0.08, "{palm:?}");
+    }
+}

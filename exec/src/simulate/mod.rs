@@ -1,0 +1,234 @@
+//! One simulated run of a plan in the true world: the arm's servos follow the timed plan, the
+//! gripper acts when the plan says, contacts are judged every step, and everything the checks
+//! need is measured on the simulated bodies ([`Observations`]). After the plan the objects
+//! settle for [`ExecOptions::settle`] seconds.
+
+mod gripper;
+pub mod observations;
+
+use crate::arm::SimArm;
+use crate::contacts::{ContactLog, ContactPoint, ContactRoles, StepContext};
+use crate::grasp::read_pads;
+use crate::trial::{ExecOptions, Frame, Setup, Timeline};
+use crate::world::SimWorld;
+use akl_planner::collision::Allowances;
+use akl_planner::{Plan, SegmentKind};
+use akl_scene::World;
+use akl_tsr::pose::position_distance;
+use akl_tsr::{Pose, WORLD_FRAME};
+use gripper::Gripper;
+pub use observations::Observations;
+use observations::{KeyframeReach, LinePath};
+
+/// A label for a plan segment, e.g. `free motion to keyframe 2` or `lift after keyframe 0`.
+pub fn segment_label(kind: SegmentKind, keyframe: usize) -> String {
+    match kind {
+        SegmentKind::Free => format!("free motion to keyframe {keyframe}"),
+        SegmentKind::Line => format!("line to keyframe {keyframe}"),
+        SegmentKind::Approach => format!("approach to keyframe {keyframe}"),
+        SegmentKind::Lift => format!("lift after keyframe {keyframe}"),
+        SegmentKind::Retreat => format!("retreat after keyframe {keyframe}"),
+        SegmentKind::Gripper => format!("gripper at keyframe {keyframe}"),
+    }
+}
+
+/// When the plan reaches each keyframe: the end of the last motion segment leading to it.
+fn reach_times(plan: &Plan, keyframes: usize) -> Vec<Option<f64>> {
+    let mut times = vec![None; keyframes];
+    for s in &plan.segments {
+        let leads_to = matches!(
+            s.kind,
+            SegmentKind::Free | SegmentKind::Approach | SegmentKind::Line
+        );
+        if leads_to && s.keyframe < keyframes {
+            times[s.keyframe] = Some(s.end);
+        }
+    }
+    times
+}
+
+/// The planned joint velocity at `t` (central difference of the timed plan).
+fn planned_velocity(plan: &Plan, t: f64) -> Vec<f64> {
+    const H: f64 = 1e-4;
+    let (a, b) = ((t - H).max(0.0), (t + H).min(plan.duration));
+    if b <= a {
+        return vec![0.0; plan.joint_names.len()];
+    }
+    let (qa, qb) = (plan.sample(a), plan.sample(b));
+    qa.iter().zip(&qb).map(|(x, y)| (y - x) / (b - a)).collect()
+}
+
+/// Simulates `plan` in `world` (the true placements) and measures the run; records frames
+/// into `timeline` when given. `None` when the robot cannot be simulated.
+pub fn simulate(
+    setup: &Setup,
+    world: &World,
+    plan: &Plan,
+    mut timeline: Option<&mut Timeline>,
+) -> Option<Observations> {
+    let options: &ExecOptions = setup.options;
+    let robot = setup.robot;
+    let mut sim = SimWorld::new(world, &options.physics);
+    let mut arm = SimArm::new(
+        &mut sim,
+        robot,
+        world.robot_base,
+        &plan.sample(0.0),
+        plan.gripper_width(0.0),
+        &options.drives,
+    )?;
+    let mut gripper = Gripper::new(
+        plan,
+        setup.spec,
+        options.grasp,
+        options.drives.grasp_force,
+        robot.open_width(),
+    );
+    let roles = ContactRoles::new(robot, world);
+    let labels: Vec<String> = plan
+        .segments
+        .iter()
+        .map(|s| segment_label(s.kind, s.keyframe))
+        .collect();
+    let settle_label = "settling".to_string();
+    let nothing = Allowances::default();
+    let mut obs = Observations {
+        contacts: ContactLog::default(),
+        ..Observations::default()
+    };
+    let reaches = reach_times(plan, setup.spec.keyframes.len());
+    let mut reached = vec![false; reaches.len()];
+    let mut lines: Vec<Option<LinePath>> = vec![None; plan.segments.len()];
+    let dt = sim.dt();
+    let steps = ((plan.duration + options.settle) / dt).ceil() as usize;
+    let path_every = (1.0 / (options.path_rate * dt)).round().max(1.0) as usize;
+    let mut square_sum = 0.0;
+    let mut tracked = 0usize;
+    let mut next_frame = 0.0;
+    let mut points: Vec<ContactPoint> = Vec::new();
+    if let Some(tl) = timeline.as_deref_mut() {
+        tl.plan = Some(plan.clone());
+    }
+    for step in 0..=steps {
+        let t = sim.time();
+        gripper.start_due(t + dt - 1e-9, &mut sim, &mut arm, &mut obs);
+        for (k, at) in reaches.iter().enumerate() {
+            if let Some(at) = at {
+                if !reached[k] && *at <= t + 0.5 * dt {
+                    reached[k] = true;
+                    obs.reaches.push(reach(setup, &sim, &arm, k, t));
+                }
+            }
+        }
+        if step % path_every == 0 {
+            for (i, o) in sim.objects.iter().enumerate().filter(|(_, o)| o.movable) {
+                obs.paths
+                    .entry(o.name.clone())
+                    .or_default()
+                    .push((t, sim.object_pose(i)));
+            }
+        }
+        if let Some(tl) = timeline.as_deref_mut() {
+            if t + 1e-9 >= next_frame {
+                tl.frames.push(Frame {
+                    t,
+                    links: arm.link_poses().to_vec(),
+                    objects: (0..sim.objects.len()).map(|i| sim.object_pose(i)).collect(),
+                    joints: arm.joint_positions().to_vec(),
+                    width: arm.width(),
+                    contacts: std::mem::take(&mut points),
+                });
+                next_frame += 1.0 / tl.rate;
+            }
+        }
+        if step == steps {
+            break;
+        }
+        let t_next = t + dt;
+        let in_plan = t_next <= plan.duration;
+        let seg = plan
+            .segments
+            .partition_point(|s| s.end < t_next)
+            .min(plan.segments.len().saturating_sub(1));
+        let q = plan.sample(t_next);
+        let qd = if in_plan {
+            planned_velocity(plan, t_next)
+        } else {
+            vec![0.0; q.len()]
+        };
+        let pads = read_pads(&sim, &arm);
+        arm.advance(&mut sim, robot, (&q, &qd), &pads, dt);
+        sim.step();
+        gripper.after_step(&mut sim, &mut arm, &mut obs);
+        let (allow, during) = match plan.segments.get(seg) {
+            Some(s) if in_plan => (&s.allowed, &labels[seg]),
+            _ => (&nothing, &settle_label),
+        };
+        let context = StepContext {
+            allow,
+            held: gripper.held(),
+            during,
+            t: t_next,
+        };
+        let want_points = timeline.is_some();
+        obs.contacts.scan(
+            &sim,
+            &roles,
+            &options.contacts,
+            &context,
+            want_points.then_some(&mut points),
+        );
+        let tcp = arm.tcp(&sim);
+        if in_plan {
+            let planned = world.robot_base * robot.tcp_pose(&q);
+            let error = position_distance(&tcp, &planned);
+            obs.tracking_max = obs.tracking_max.max(error);
+            square_sum += error * error;
+            tracked += 1;
+            if let Some(s) = plan
+                .segments
+                .get(seg)
+                .filter(|s| s.kind == SegmentKind::Line)
+            {
+                lines[seg]
+                    .get_or_insert_with(|| LinePath {
+                        keyframe: s.keyframe,
+                        start: s.start,
+                        end: s.end,
+                        points: Vec::new(),
+                    })
+                    .points
+                    .push(tcp.translation.vector);
+            }
+        }
+    }
+    obs.tracking_rms = (square_sum / tracked.max(1) as f64).sqrt();
+    obs.lines = lines.into_iter().flatten().collect();
+    gripper.finish(&sim, &mut obs);
+    obs.settled = Some(sim.snapshot());
+    obs.speeds = (0..sim.objects.len())
+        .filter(|&i| sim.objects[i].movable)
+        .map(|i| {
+            let (v, w) = sim.object_speed(i);
+            (sim.objects[i].name.clone(), v, w)
+        })
+        .collect();
+    obs.simulated = sim.time();
+    Some(obs)
+}
+
+/// The simulated TCP and keyframe `k`'s reference object now.
+fn reach(setup: &Setup, sim: &SimWorld, arm: &SimArm, k: usize, t: f64) -> KeyframeReach {
+    let name = &setup.spec.keyframes[k].reference;
+    let reference = if name == WORLD_FRAME {
+        Some(Pose::identity())
+    } else {
+        sim.object_index(name).map(|i| sim.object_pose(i))
+    };
+    KeyframeReach {
+        keyframe: k,
+        t,
+        tcp: arm.tcp(sim),
+        reference,
+    }
+}
