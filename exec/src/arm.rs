@@ -345,6 +345,15 @@ impl SimArm {
         self.finger = command;
     }
 
+    /// Whether the fingers are closing (a grasp, or an opening narrower than now): what they
+    /// touch then decides how far they move.
+    pub fn closing(&self) -> bool {
+        match self.finger {
+            FingerCommand::Grasp => true,
+            FingerCommand::Width(w) => w < self.width,
+        }
+    }
+
     /// The fingers' current command.
     pub fn finger_command(&self) -> FingerCommand {
         self.finger
@@ -402,11 +411,7 @@ mod tests {
     use crate::world::Physics;
     use akl_tsr::pose::position_distance;
 
-    const FREE_PADS: [PadReading; 2] = [PadReading {
-        object: None,
-        gap: f64::INFINITY,
-        force: 0.0,
-    }; 2];
+    const FREE_PADS: [PadReading; 2] = [PadReading::NOTHING; 2];
 
     fn empty() -> akl_scene::World {
         akl_scene::World {

@@ -187,6 +187,8 @@ pub struct ContactLog {
     collisions: Vec<Collision>,
     /// The forces of the last steps, by collider pair.
     recent: HashMap<(ColliderHandle, ColliderHandle), [f64; SUSTAIN_STEPS]>,
+    /// The map of the step before, kept to be reused.
+    spare: HashMap<(ColliderHandle, ColliderHandle), [f64; SUSTAIN_STEPS]>,
     /// Deepest contact of the arm or the held object (metres).
     pub deepest: Extreme,
     /// Largest force of a contact of the arm or the held object (N).
@@ -205,7 +207,8 @@ impl ContactLog {
         mut points: Option<&mut Vec<ContactPoint>>,
     ) {
         let dt = sim.dt();
-        let mut recent = HashMap::with_capacity(self.recent.len());
+        let mut recent = std::mem::take(&mut self.spare);
+        recent.clear();
         for pair in sim.physics.narrow_phase.contact_pairs() {
             let Some((_, deepest)) = pair.find_deepest_contact() else {
                 continue;
@@ -246,7 +249,7 @@ impl ContactLog {
                 self.record(a, b, allowed, step, depth, force);
             }
         }
-        self.recent = recent;
+        self.spare = std::mem::replace(&mut self.recent, recent);
     }
 
     /// The force a pair has kept up over the last [`SUSTAIN_STEPS`] steps (the smallest of

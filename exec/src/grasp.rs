@@ -74,6 +74,13 @@ pub struct PadReading {
 }
 
 impl PadReading {
+    /// A pad with nothing near it.
+    pub const NOTHING: PadReading = PadReading {
+        object: None,
+        gap: f64::INFINITY,
+        force: 0.0,
+    };
+
     /// Whether the pad touches its nearest object ([`PAD_CONTACT`]).
     pub fn touches(&self) -> bool {
         self.object.is_some() && self.gap <= PAD_CONTACT
@@ -82,11 +89,7 @@ impl PadReading {
 
 /// What each pad touches now.
 pub fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
-    let mut pads = [PadReading {
-        object: None,
-        gap: f64::INFINITY,
-        force: 0.0,
-    }; 2];
+    let mut pads = [PadReading::NOTHING; 2];
     for (k, finger) in arm.hand().fingers.iter().enumerate() {
         let Some(rb) = arm
             .body(finger.link)

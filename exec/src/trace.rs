@@ -7,11 +7,21 @@
 //! - `/keyframes` (`foxglove.SceneUpdate`): each keyframe's TSR (its position bounds as a box,
 //!   grounded on the reference's pose when reached) and the TCP reached, green or red;
 //! - `/lines` (`foxglove.SceneUpdate`): each `move_in_line` segment's line and executed path;
-//! - `/events` (`foxglove.Log`): grasps, releases, collisions and the verdict.
+//! - `/events` (`foxglove.Log`): grasps, releases, collisions, a planning failure and the
+//!   verdict;
+//! - `/perceived` (`foxglove.SceneUpdate`): the objects where the planner perceived them;
+//! - `/rejected` (`foxglove.SceneUpdate`): when planning failed at a keyframe, the arm at IK
+//!   solutions of its TSR (grounded on the perceived world) that were rejected, each with what
+//!   it collides with;
+//! - `/joint_states` (JSON): the simulated joint positions and gripper opening;
+//! - `/contacts` (`foxglove.SceneUpdate`): contact points of the arm and the held object, red
+//!   where they are collisions, sized by their force.
 
 use crate::error::ExecError;
 use crate::report::TrialReport;
-use crate::trial::Timeline;
+use crate::trial::{Frame, Timeline};
+use akl_planner::collision::{Checker, RobotCollision, Scene};
+use akl_planner::contact_rules::Step;
 use akl_planner::{Geometry, GripperAction, Robot};
 use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::{Translation3, UnitQuaternion, Vector3};
@@ -53,6 +63,11 @@ const ROBOT: [f64; 4] = [0.85, 0.85, 0.9, 0.9];
 const PASS: [f64; 4] = [0.2, 0.8, 0.3, 0.35];
 const FAIL: [f64; 4] = [0.9, 0.15, 0.15, 0.5];
 const LINE: [f64; 4] = [0.2, 0.4, 1.0, 1.0];
+const PERCEIVED: [f64; 4] = [0.3, 0.8, 0.9, 0.35];
+const GHOST: [f64; 4] = [0.9, 0.2, 0.2, 0.25];
+
+/// IK solutions of a failed keyframe drawn in a planning-failure trace.
+const GHOSTS: usize = 6;
 
 /// Primitives of one entity, by Foxglove field name.
 #[derive(Default)]
@@ -244,6 +259,15 @@ mod schema {
         )
     }
 
+    /// The simulated joints: names, positions and the gripper opening.
+    pub fn joint_state() -> Value {
+        titled(
+            "akl.JointState",
+            object(json!({"timestamp": time(), "name": array(string()),
+                "position": array(number()), "gripper_width": number()})),
+        )
+    }
+
     /// `foxglove.Log`.
     pub fn log() -> Value {
         titled(
@@ -267,8 +291,12 @@ struct Channels {
     tf: u16,
     robot: u16,
     objects: u16,
+    perceived: u16,
     keyframes: u16,
+    rejected: u16,
     lines: u16,
+    joints: u16,
+    contacts: u16,
     events: u16,
 }
 
@@ -308,13 +336,18 @@ fn trace_bytes(path: &Path, input: &TraceInput) -> Result<Vec<u8>, ExecError> {
     let tf_schema = schema("foxglove.FrameTransforms", schema::frame_transforms()).map_err(&err)?;
     let scene_schema = schema("foxglove.SceneUpdate", schema::scene_update()).map_err(&err)?;
     let log_schema = schema("foxglove.Log", schema::log()).map_err(&err)?;
+    let joint_schema = schema("akl.JointState", schema::joint_state()).map_err(&err)?;
     let mut channel = |schema: u16, topic: &str| writer.add_channel(schema, topic, "json", &none);
     let channels = Channels {
         tf: channel(tf_schema, "/tf").map_err(&err)?,
         robot: channel(scene_schema, "/robot").map_err(&err)?,
         objects: channel(scene_schema, "/objects").map_err(&err)?,
+        perceived: channel(scene_schema, "/perceived").map_err(&err)?,
         keyframes: channel(scene_schema, "/keyframes").map_err(&err)?,
+        rejected: channel(scene_schema, "/rejected").map_err(&err)?,
         lines: channel(scene_schema, "/lines").map_err(&err)?,
+        joints: channel(joint_schema, "/joint_states").map_err(&err)?,
+        contacts: channel(scene_schema, "/contacts").map_err(&err)?,
         events: channel(log_schema, "/events").map_err(&err)?,
     };
     let r = input.report;
@@ -333,7 +366,26 @@ fn trace_bytes(path: &Path, input: &TraceInput) -> Result<Vec<u8>, ExecError> {
         .map_err(&err)?;
     let mut messages: Vec<(f64, u16, Value)> = Vec::new();
     messages.push((0.0, channels.robot, robot_shapes(input.robot)));
+    let world_poses: Vec<Pose> = input.world.objects.iter().map(|o| o.pose).collect();
+    messages.push((
+        0.0,
+        channels.objects,
+        objects(input.world, 0.0, &world_poses, None),
+    ));
+    if let Some(seen) = &input.timeline.perceived {
+        let poses: Vec<Pose> = seen.objects.iter().map(|o| o.pose).collect();
+        messages.push((
+            0.0,
+            channels.perceived,
+            objects(seen, 0.0, &poses, Some(PERCEIVED)),
+        ));
+    }
+    if let Some(failure) = &input.timeline.planning_failure {
+        messages.extend(planning_failure(input, failure, &channels));
+    }
     for frame in &input.timeline.frames {
+        messages.push((frame.t, channels.joints, joint_state(input.robot, frame)));
+        messages.push((frame.t, channels.contacts, contacts(frame)));
         messages.push((
             frame.t,
             channels.tf,
@@ -342,7 +394,7 @@ fn trace_bytes(path: &Path, input: &TraceInput) -> Result<Vec<u8>, ExecError> {
         messages.push((
             frame.t,
             channels.objects,
-            objects(input.world, frame.t, &frame.objects),
+            objects(input.world, frame.t, &frame.objects, None),
         ));
     }
     messages.extend(keyframes(input, channels.keyframes));
@@ -395,17 +447,129 @@ fn transforms(robot: &Robot, t: f64, links: &[Pose]) -> Value {
     json!({ "transforms": transforms })
 }
 
-fn objects(world: &World, t: f64, poses: &[Pose]) -> Value {
+/// The objects of `world` at `poses`, in their usual colours or all in `tint`.
+fn objects(world: &World, t: f64, poses: &[Pose], tint: Option<[f64; 4]>) -> Value {
     let entities = world
         .objects
         .iter()
         .zip(poses)
         .map(|(o, at)| {
             let mut p = Primitives::default();
-            p.shape(&o.shape, at, if o.movable { MOVABLE } else { FURNITURE });
+            let rgba = tint.unwrap_or(if o.movable { MOVABLE } else { FURNITURE });
+            p.shape(&o.shape, at, rgba);
             p.entity(t, "world", &o.name, false)
         })
         .collect();
+    scene_update(entities)
+}
+
+fn joint_state(robot: &Robot, frame: &Frame) -> Value {
+    json!({"timestamp": stamp(frame.t), "name": robot.joint_names(), "position": frame.joints,
+           "gripper_width": frame.width})
+}
+
+fn contacts(frame: &Frame) -> Value {
+    let mut p = Primitives::default();
+    for c in &frame.contacts {
+        let radius = 0.003 + 0.0002 * c.force.min(100.0);
+        let rgba = if c.collision { FAIL } else { PASS };
+        p.sphere(
+            &Pose::translation(c.point[0], c.point[1], c.point[2]),
+            radius,
+            [rgba[0], rgba[1], rgba[2], 0.9],
+        );
+    }
+    scene_update(vec![p.entity(frame.t, "world", "contacts", false)])
+}
+
+/// Where planning failed: every keyframe's TSR grounded on the perceived world, and for the
+/// keyframe that failed, the arm at rejected IK solutions with what each collides with.
+fn planning_failure(
+    input: &TraceInput,
+    failure: &str,
+    channels: &Channels,
+) -> Vec<(f64, u16, Value)> {
+    let seen = input.timeline.perceived.as_ref().unwrap_or(input.world);
+    let poses = seen.object_poses();
+    let failed = failed_keyframe(failure);
+    let mut out = vec![(
+        0.0,
+        channels.events,
+        log(0.0, 4, &format!("planning failed: {failure}")),
+    )];
+    let Ok(grounded) = input.spec.ground(&poses) else {
+        return out;
+    };
+    for (k, kf) in grounded.keyframes.iter().enumerate() {
+        let mut p = Primitives::default();
+        let rgba = if Some(k) == failed { FAIL } else { PASS };
+        let nominal = kf.tsr.nominal();
+        let bw = kf.tsr.bw.0;
+        let centre = Vector3::from_fn(|i, _| 0.5 * (bw[i][0] + bw[i][1]));
+        let size = Vector3::from_fn(|i, _| (bw[i][1] - bw[i][0]).max(1e-3));
+        let region = Pose::from_parts(
+            Translation3::from(nominal.translation.vector + kf.tsr.t0_w.rotation * centre),
+            kf.tsr.t0_w.rotation,
+        );
+        p.cube(&region, size, rgba);
+        p.text(
+            &(Translation3::new(0.0, 0.0, 0.04) * nominal),
+            &format!("keyframe {k}"),
+        );
+        let id = format!("keyframe {k}");
+        out.push((
+            0.0,
+            channels.keyframes,
+            scene_update(vec![p.entity(0.0, "world", &id, false)]),
+        ));
+    }
+    if let Some(kf) = failed.and_then(|k| grounded.keyframes.get(k)) {
+        out.push((0.0, channels.rejected, rejected(input.robot, seen, kf)));
+    }
+    out
+}
+
+/// The keyframe a planning error names (`keyframe 3: ...`).
+fn failed_keyframe(failure: &str) -> Option<usize> {
+    let rest = failure.split("keyframe ").nth(1)?;
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    digits.parse().ok()
+}
+
+/// The arm at IK solutions of `kf`'s nominal pose in `world`, each with its first collision.
+fn rejected(robot: &Robot, world: &World, kf: &akl_tsr::Keyframe) -> Value {
+    let model = RobotCollision::new(robot);
+    let scene = Scene::new(world, &[]);
+    let checker = Checker::new(robot, &model, &scene);
+    let grasping = (kf.gripper == akl_tsr::Gripper::Closed).then_some(kf.reference.as_str());
+    let allow = Step {
+        grasping,
+        ..Step::default()
+    }
+    .allowances();
+    let target = world.robot_base.inverse() * kf.tsr.nominal();
+    let mut entities = Vec::new();
+    for (n, q) in robot
+        .ik_solutions(&target, robot.ready(), GHOSTS)
+        .iter()
+        .enumerate()
+    {
+        let hit = checker.check(q, robot.open_width(), None, &allow);
+        let mut p = Primitives::default();
+        let links = robot.link_poses(q, robot.open_width());
+        for (link, at) in robot.links().iter().zip(&links) {
+            for s in &link.shapes {
+                p.geometry(&s.geometry, &(world.robot_base * at * s.origin), GHOST);
+            }
+        }
+        let tcp = world.robot_base * links[robot.tcp_link()];
+        let what = hit.map_or_else(|| "free".to_string(), |h| h.to_string());
+        p.text(
+            &(Translation3::new(0.0, 0.0, 0.08 + 0.03 * n as f64) * tcp),
+            &format!("IK {n}: {what}"),
+        );
+        entities.push(p.entity(0.0, "world", &format!("rejected {n}"), false));
+    }
     scene_update(entities)
 }
 
@@ -510,14 +674,19 @@ fn events(input: &TraceInput, channel: u16) -> Vec<(f64, u16, Value)> {
         out.push((g.t, channel, log(g.t, level, &message)));
     }
     for c in &r.collisions {
-        let message = format!(
-            "collision: {} touched {} ({}, {:.1} mm deep)",
-            c.a,
-            c.b,
-            c.during,
-            c.depth * 1e3
-        );
+        let message = format!("collision: {}", c.describe());
         out.push((c.t, channel, log(c.t, ERROR, &message)));
+    }
+    for f in r
+        .failures
+        .iter()
+        .filter(|f| f.cause == crate::report::Cause::GraspFailed)
+    {
+        out.push((
+            r.simulated_seconds,
+            channel,
+            log(r.simulated_seconds, ERROR, &f.detail),
+        ));
     }
     let end = r.simulated_seconds;
     let verdict = if r.passed {
@@ -585,8 +754,63 @@ mod tests {
         assert_eq!(topics["/robot"], 1);
         assert_eq!(topics["/keyframes"], spec.keyframes.len());
         assert_eq!(topics["/lines"], 1);
-        assert!(topics["/tf"] > 100 && topics["/tf"] == topics["/objects"]);
+        assert!(topics["/tf"] > 100 && topics["/tf"] + 1 == topics["/objects"]);
+        assert_eq!(topics["/tf"], topics["/joint_states"]);
+        assert_eq!(topics["/tf"], topics["/contacts"]);
+        assert_eq!(topics["/perceived"], 1);
+        assert!(!topics.contains_key("/rejected"));
         assert!(topics["/events"] >= 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_planning_failure_shows_the_worlds_the_tsrs_and_the_rejected_arms() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let mut spec = task.truth.clone().unwrap();
+        let last = spec.keyframes.len() - 1;
+        // The part put 3 cm into the shelf: every solution presses it in.
+        spec.keyframes[last].tsr.tw_e.translation.vector.z -= 0.03;
+        let exec = ExecOptions::default();
+        let options = BatchOptions {
+            trials: 1,
+            randomize: true,
+            seed: 3,
+            jobs: 1,
+        };
+        let batch = Batch::new(&robot, &task, &spec, &exec, options).unwrap();
+        let (report, timeline) = batch.record(0, TRACE_RATE);
+        assert!(!report.passed && timeline.frames.is_empty());
+        let dir = std::env::temp_dir().join(format!("akl-trace-plan-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("trace.mcap");
+        let input = TraceInput {
+            robot: &robot,
+            world: batch.world(0).unwrap(),
+            spec: &spec,
+            report: &report,
+            timeline: &timeline,
+        };
+        write_trace(&path, &input).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let mut topics: BTreeMap<String, Vec<Value>> = BTreeMap::new();
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            let value: Value = serde_json::from_slice(&m.data).unwrap();
+            topics
+                .entry(m.channel.topic.clone())
+                .or_default()
+                .push(value);
+        }
+        assert_eq!(topics["/objects"].len(), 1);
+        assert_eq!(topics["/perceived"].len(), 1);
+        assert_eq!(topics["/keyframes"].len(), spec.keyframes.len());
+        let ghosts = topics["/rejected"][0]["entities"].as_array().unwrap();
+        assert!(!ghosts.is_empty());
+        let label = ghosts[0]["texts"][0]["text"].as_str().unwrap();
+        assert!(label.starts_with("IK 0: "), "{label}");
+        let said = topics["/events"][0]["message"].as_str().unwrap();
+        assert!(said.starts_with("planning failed: keyframe 3"), "{said}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

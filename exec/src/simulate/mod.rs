@@ -8,7 +8,7 @@ pub mod observations;
 
 use crate::arm::SimArm;
 use crate::contacts::{ContactLog, ContactPoint, ContactRoles, StepContext};
-use crate::grasp::read_pads;
+use crate::grasp::{read_pads, PadReading};
 use crate::trial::{ExecOptions, Frame, Setup, Timeline};
 use crate::world::SimWorld;
 use akl_planner::collision::Allowances;
@@ -156,7 +156,11 @@ pub fn simulate(
         } else {
             vec![0.0; q.len()]
         };
-        let pads = read_pads(&sim, &arm);
+        let pads = if arm.closing() {
+            read_pads(&sim, &arm)
+        } else {
+            [PadReading::NOTHING; 2]
+        };
         arm.advance(&mut sim, robot, (&q, &qd), &pads, dt);
         sim.step();
         gripper.after_step(&mut sim, &mut arm, &mut obs);
