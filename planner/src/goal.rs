@@ -1,11 +1,31 @@
-//! TSR goals: poses drawn from a keyframe's grounded TSR (the nominal pose first), solved by
-//! inverse kinematics, kept when a caller's test (collision, approach, look-ahead) accepts
-//! them, nearest the current configuration first.
+//! TSR goals: poses drawn from a keyframe's grounded TSR, solved by inverse kinematics, kept
+//! when a caller's test (collision, approach, look-ahead) accepts them.
+//!
+//! Two strategies ([`GoalStrategy`]): `Nominal` stays on the TSR's nominal pose whenever it is
+//! reachable (the spec's demonstrated pose, exactly on target), nearest the current
+//! configuration first; `Spread` draws poses across the whole region and keeps every IK branch
+//! it finds, quickest to reach first, so that a wider TSR gives the planner more to choose
+//! from.
 
 use crate::robot::Robot;
+use crate::timing;
 use akl_tsr::{Pose, Tsr};
 use rand::Rng;
 use std::collections::BTreeMap;
+
+/// Which goals a search returns, and in which order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GoalStrategy {
+    /// The nominal pose first; when it has an accepted solution only its solutions are
+    /// returned; nearest the current configuration (joint-space distance) first.
+    #[default]
+    Nominal,
+    /// Poses drawn across the region (the nominal among them) and every IK branch found for
+    /// each, until `enough` are accepted; quickest to reach from the current configuration
+    /// first (the rest-to-rest time of the straight joint-space move, within the velocity and
+    /// acceleration limits).
+    Spread,
+}
 
 /// How hard to look for goal configurations.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -16,6 +36,8 @@ pub struct GoalOptions {
     pub solutions_per_pose: usize,
     /// Accepted candidates after which the search stops.
     pub enough: usize,
+    /// Nominal-first or spread across the region.
+    pub strategy: GoalStrategy,
 }
 
 impl Default for GoalOptions {
@@ -24,6 +46,7 @@ impl Default for GoalOptions {
             poses: 30,
             solutions_per_pose: 6,
             enough: 4,
+            strategy: GoalStrategy::Nominal,
         }
     }
 }
@@ -76,9 +99,11 @@ pub fn tsr_poses<R: Rng + ?Sized>(tsr: &Tsr, count: usize, rng: &mut R) -> Vec<P
 
 /// Searches goal configurations for `tsr` (world frame); `base` is the robot base pose,
 /// `seed` the current configuration. `accept` returns the caller's data or why it rejects a
-/// configuration. If the nominal pose yields an accepted configuration, only the nominal
-/// pose's candidates are returned (they are exactly on target); otherwise poses are drawn
-/// until `enough` candidates are found. Candidates come nearest `seed` first.
+/// configuration. With [`GoalStrategy::Nominal`], if the nominal pose yields an accepted
+/// configuration only the nominal pose's candidates are returned (they are exactly on
+/// target), otherwise poses are drawn until `enough` candidates are found, nearest `seed`
+/// first. With [`GoalStrategy::Spread`] poses are drawn until `enough` candidates are found,
+/// quickest to reach from `seed` first.
 pub fn find_goals<T, R: Rng + ?Sized>(
     robot: &Robot,
     tsr: &Tsr,
@@ -108,7 +133,8 @@ pub fn find_goals<T, R: Rng + ?Sized>(
                 Err(reason) => *reasons.entry(reason).or_default() += 1,
             }
         }
-        if (k == 0 && !found.is_empty()) || found.len() >= options.enough {
+        let nominal_done = options.strategy == GoalStrategy::Nominal && k == 0;
+        if (nominal_done && !found.is_empty()) || found.len() >= options.enough {
             break;
         }
     }
@@ -123,7 +149,26 @@ pub fn find_goals<T, R: Rng + ?Sized>(
             blocker,
         });
     }
-    let distance = |q: &[f64]| crate::space::distance(q, seed);
-    found.sort_by(|a, b| distance(&a.q).total_cmp(&distance(&b.q)));
+    match options.strategy {
+        GoalStrategy::Nominal => {
+            let distance = |q: &[f64]| crate::space::distance(q, seed);
+            found.sort_by(|a, b| distance(&a.q).total_cmp(&distance(&b.q)));
+        }
+        GoalStrategy::Spread => {
+            let time = |q: &[f64]| move_time(robot, seed, q);
+            found.sort_by(|a, b| time(&a.q).total_cmp(&time(&b.q)));
+        }
+    }
     Ok(found)
+}
+
+/// Seconds of the fastest rest-to-rest straight joint-space move from `a` to `b`: a lower
+/// bound on any motion between them, used to rank goals.
+pub fn move_time(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
+    timing::linear(
+        &[a.to_vec(), b.to_vec()],
+        robot.velocity_limits(),
+        robot.acceleration_limits(),
+    )
+    .duration()
 }
