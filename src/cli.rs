@@ -145,9 +145,10 @@ pub struct PlanArgs {
     pub seed: u64,
     /// Planning budget in milliseconds: the planner plans whole-spec candidates, spreading
     /// goals across every TSR and IK branch, and keeps the quickest. The budget is converted
-    /// to a fixed number of candidates (1 + MS / (2.5 ms x keyframes), calibrated on the
-    /// reference machine), so the plan depends on the seed and budget only, never on the
-    /// machine's speed. 0 plans one candidate, every keyframe on its nominal pose when reachable.
+    /// to a fixed number of candidates (1 + MS / (3.8 ms x keyframes), calibrated on the
+    /// reference machine, see BENCHMARKS.md), so the plan depends on the seed and budget only,
+    /// never on the machine's speed or load. 0 plans one candidate, every keyframe on its
+    /// nominal pose when reachable.
     #[arg(long, value_name = "MS", default_value_t = 200)]
     pub budget: u64,
     /// Write the full plan (timed trajectory and gripper events) as JSON to this file.

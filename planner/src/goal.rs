@@ -20,9 +20,9 @@ pub enum GoalStrategy {
     /// returned; nearest the current configuration (joint-space distance) first.
     #[default]
     Nominal,
-    /// Poses drawn across the region (the nominal among them) and every IK branch found for
-    /// each, until `enough` are accepted; quickest to reach from the current configuration
-    /// first (the rest-to-rest time of the straight joint-space move, within the velocity and
+    /// Poses drawn across the region (the nominal among them), `enough` at a time, and every IK
+    /// branch found for each, tried and returned quickest to reach from the current
+    /// configuration first (the rest-to-rest time of the straight joint-space move, within the velocity and
     /// acceleration limits).
     Spread,
 }
@@ -34,7 +34,8 @@ pub struct GoalOptions {
     pub poses: usize,
     /// Distinct IK solutions tried per pose.
     pub solutions_per_pose: usize,
-    /// Accepted candidates after which the search stops.
+    /// Accepted candidates after which the search stops (with `Spread`, also the poses drawn
+    /// at a time).
     pub enough: usize,
     /// Nominal-first or spread across the region.
     pub strategy: GoalStrategy,
@@ -102,8 +103,9 @@ pub fn tsr_poses<R: Rng + ?Sized>(tsr: &Tsr, count: usize, rng: &mut R) -> Vec<P
 /// configuration. With [`GoalStrategy::Nominal`], if the nominal pose yields an accepted
 /// configuration only the nominal pose's candidates are returned (they are exactly on
 /// target), otherwise poses are drawn until `enough` candidates are found, nearest `seed`
-/// first. With [`GoalStrategy::Spread`] poses are drawn until `enough` candidates are found,
-/// quickest to reach from `seed` first.
+/// first. With [`GoalStrategy::Spread`] poses are drawn `enough` at a time and their IK
+/// branches tried quickest to reach from `seed` first, until `enough` candidates are found,
+/// quickest first.
 pub fn find_goals<T, R: Rng + ?Sized>(
     robot: &Robot,
     tsr: &Tsr,
@@ -119,21 +121,40 @@ pub fn find_goals<T, R: Rng + ?Sized>(
     let mut solutions = 0;
     let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
     let mut tried = 0;
-    for (k, pose) in poses.iter().enumerate() {
-        tried += 1;
-        let target = base_inv * pose;
-        for q in robot.ik_solutions(&target, seed, options.solutions_per_pose) {
+    // Nominal: one pose at a time. Spread: `enough` poses at a time, their IK branches tried
+    // quickest first, so the accept test (the costly part) runs on the best branches only.
+    let chunk = match options.strategy {
+        GoalStrategy::Nominal => 1,
+        GoalStrategy::Spread => options.enough.max(1),
+    };
+    for (c, group) in poses.chunks(chunk).enumerate() {
+        tried += group.len();
+        let mut branches: Vec<(Pose, Vec<f64>)> = Vec::new();
+        for pose in group {
+            let target = base_inv * pose;
+            for q in robot.ik_solutions(&target, seed, options.solutions_per_pose) {
+                branches.push((*pose, q));
+            }
+        }
+        if options.strategy == GoalStrategy::Spread {
+            let mut timed: Vec<(f64, (Pose, Vec<f64>))> = branches
+                .into_iter()
+                .map(|b| (move_time(robot, seed, &b.1), b))
+                .collect();
+            timed.sort_by(|a, b| a.0.total_cmp(&b.0));
+            branches = timed.into_iter().map(|(_, b)| b).collect();
+        }
+        for (pose, q) in branches {
+            if options.strategy == GoalStrategy::Spread && found.len() >= options.enough {
+                break;
+            }
             solutions += 1;
-            match accept(pose, &q) {
-                Ok(data) => found.push(Candidate {
-                    pose: *pose,
-                    q,
-                    data,
-                }),
+            match accept(&pose, &q) {
+                Ok(data) => found.push(Candidate { pose, q, data }),
                 Err(reason) => *reasons.entry(reason).or_default() += 1,
             }
         }
-        let nominal_done = options.strategy == GoalStrategy::Nominal && k == 0;
+        let nominal_done = options.strategy == GoalStrategy::Nominal && c == 0;
         if (nominal_done && !found.is_empty()) || found.len() >= options.enough {
             break;
         }

@@ -15,12 +15,8 @@
 //! through their remaining keyframes within the budget (a breadth-first lower bound that
 //! ignores lines) are dropped, which changes no count.
 //!
-//! Counts are exact: unsigned integers of fixed width in one flat array of 64-bit limbs per
-//! step, wide enough for the largest possible count (6 to the power of the budget). They are
-//! added limb by limb without allocating; the total is returned as a `num_bigint::BigUint`.
-//! Flat limbs rather than a `BigUint` per state because the search adds millions of counts
-//! per spec and a `BigUint` per addition costs an allocation check and a length dispatch
-//! (measured in the `flexibility` benchmark against the same search with `BigUint`).
+//! Counts are exact: a `num_bigint::BigUint` per state. (Fixed-width limbs in one flat array
+//! were tried and measured no faster: the time goes to visiting the states, not to adding.)
 
 use super::lattice::{distances, NONE};
 use num_bigint::BigUint;
@@ -57,48 +53,21 @@ impl TraceProblem<'_> {
     }
 }
 
-/// Limbs needed for any count of walks of at most `steps` steps with at most six moves each.
-fn limbs_for(steps: usize) -> usize {
-    let bits = (steps as f64 + 1.0) * 6f64.log2() + 2.0;
-    (bits / 64.0).ceil() as usize
-}
-
-/// Adds `src` into `dst` (same width; the width is chosen so that no carry leaves it).
-fn add_limbs(dst: &mut [u64], src: &[u64]) {
-    let mut carry = false;
-    for (d, s) in dst.iter_mut().zip(src) {
-        let (v, c1) = d.overflowing_add(*s);
-        let (v, c2) = v.overflowing_add(u64::from(carry));
-        *d = v;
-        carry = c1 || c2;
-    }
-}
-
-fn to_biguint(limbs: &[u64]) -> BigUint {
-    let digits: Vec<u32> = limbs
-        .iter()
-        .flat_map(|l| [*l as u32, (*l >> 32) as u32])
-        .collect();
-    BigUint::new(digits)
-}
-
-/// One step's states: per cell a short list of (set, count slot).
+/// One step's states: per cell a short list of (set, count).
 struct Layer {
-    width: usize,
     /// First entry of each cell, [`NONE`] if none.
     head: Vec<u32>,
     /// Per entry: set id, next entry of the same cell.
     entries: Vec<(u32, u32)>,
     /// Cell of each entry.
     cells: Vec<u32>,
-    /// `width` limbs per entry.
-    counts: Vec<u64>,
+    /// One count per entry.
+    counts: Vec<BigUint>,
 }
 
 impl Layer {
-    fn new(cells: usize, width: usize) -> Layer {
+    fn new(cells: usize) -> Layer {
         Layer {
-            width,
             head: vec![NONE; cells],
             entries: Vec::new(),
             cells: Vec::new(),
@@ -129,7 +98,7 @@ impl Layer {
         self.entries.push((set, self.head[cell as usize]));
         self.head[cell as usize] = id as u32;
         self.cells.push(cell);
-        self.counts.extend(std::iter::repeat_n(0, self.width));
+        self.counts.push(BigUint::default());
         id
     }
 }
@@ -288,8 +257,7 @@ pub fn count_traces(problem: &TraceProblem) -> BigUint {
         classes,
         n,
     };
-    let width = limbs_for(problem.max_steps);
-    let mut total = vec![0u64; width];
+    let mut total = BigUint::default();
     let budget = problem.max_steps as u64;
     let fits = |sets: &Sets, cell: u32, set: u32, t: u64| {
         let r = rem[sets.highest(set)][cell as usize];
@@ -297,13 +265,13 @@ pub fn count_traces(problem: &TraceProblem) -> BigUint {
     };
     let first = sets.intern(1);
     let start_set = sets.step(first, class_of[problem.start as usize]);
-    let mut layer = Layer::new(problem.cells(), width);
-    let mut next = Layer::new(problem.cells(), width);
+    let mut layer = Layer::new(problem.cells());
+    let mut next = Layer::new(problem.cells());
     if start_set != NONE && fits(&sets, problem.start, start_set, 0) {
         let s = layer.slot(problem.start, start_set);
-        layer.counts[s * width] = 1;
+        layer.counts[s] = BigUint::from(1u32);
         if problem.start == problem.end && sets.done(start_set) {
-            total[0] = 1;
+            total = BigUint::from(1u32);
         }
     }
     for t in 1..=budget {
@@ -322,19 +290,18 @@ pub fn count_traces(problem: &TraceProblem) -> BigUint {
                     continue;
                 }
                 let s = next.slot(m, to);
-                let (src, dst) = (&layer.counts[e * width..(e + 1) * width], &mut next.counts);
-                add_limbs(&mut dst[s * width..(s + 1) * width], src);
+                next.counts[s] += &layer.counts[e];
             }
         }
         for e in 0..next.entries.len() {
             if next.cells[e] == problem.end && sets.done(next.entries[e].0) {
-                add_limbs(&mut total, &next.counts[e * width..(e + 1) * width]);
+                total += &next.counts[e];
             }
         }
         std::mem::swap(&mut layer, &mut next);
         next.clear();
     }
-    to_biguint(&total)
+    total
 }
 
 /// log2 of a positive count, `None` for zero.

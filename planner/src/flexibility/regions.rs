@@ -210,6 +210,8 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
         /// Every pose drawn from a TSR has its position in a cell of the region, and widening
         /// the bounds never drops a cell.
         #[test]
