@@ -18,7 +18,10 @@ fn the_table_reports_bits_shares_and_the_planners_gains() {
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("bits of freedom"), "{out}");
-    assert!(out.contains("its share") && out.contains("line to 2"), "{out}");
+    assert!(
+        out.contains("its share") && out.contains("line to 2"),
+        "{out}"
+    );
     assert!(out.contains("planned 2/2"), "{out}");
     assert!(out.contains("joint-path length"), "{out}");
 }
@@ -70,7 +73,15 @@ fn a_redundant_keyframe_costs_bits_through_the_cli() {
     let path = dir.join("redundant.json");
     std::fs::write(&path, serde_json::to_string_pretty(&spec).unwrap()).unwrap();
     let bits = |file: &str| {
-        let o = akl(&["flexibility", file, "--task", "pick_place", "--scenes", "0", "--json"]);
+        let o = akl(&[
+            "flexibility",
+            file,
+            "--task",
+            "pick_place",
+            "--scenes",
+            "0",
+            "--json",
+        ]);
         assert!(o.status.success(), "{}", stderr(&o));
         json(&o)["freedom"]["bits"].as_f64().unwrap()
     };
@@ -88,7 +99,12 @@ fn bad_input_exits_2_naming_the_file() {
     let dir = scratch("flexibility-bad");
     let broken = dir.join("broken.json");
     std::fs::write(&broken, "{\"akl_spec\": 1, \"task\": ").unwrap();
-    let o = akl(&["flexibility", broken.to_str().unwrap(), "--task", "inspection"]);
+    let o = akl(&[
+        "flexibility",
+        broken.to_str().unwrap(),
+        "--task",
+        "inspection",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("broken.json"), "{}", stderr(&o));
 

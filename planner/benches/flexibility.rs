@@ -63,7 +63,14 @@ fn main() {
             b.iter(|| black_box(ws.traces(&truth)))
         });
         c.bench_function(&format!("flexibility/{name}/plan_task (baseline)"), |b| {
-            b.iter(|| black_box(plan_task(&robot, &truth, &task.world, &PlanOptions::default())))
+            b.iter(|| {
+                black_box(plan_task(
+                    &robot,
+                    &truth,
+                    &task.world,
+                    &PlanOptions::default(),
+                ))
+            })
         });
     }
     c.final_summary();

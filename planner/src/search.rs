@@ -134,7 +134,10 @@ pub fn plan_best(
             result: result.as_ref().map(|p| p.duration).map_err(Clone::clone),
         });
         if let Ok(plan) = result {
-            if best.as_ref().is_none_or(|(_, b)| plan.duration < b.duration) {
+            if best
+                .as_ref()
+                .is_none_or(|(_, b)| plan.duration < b.duration)
+            {
                 best = Some((k, plan));
             }
         }

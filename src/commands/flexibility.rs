@@ -45,10 +45,8 @@ pub fn run(args: FlexibilityArgs) -> CliResult {
                 source,
             })
         })?;
-    let workspace =
-        Workspace::new(&robot, &task, &FreedomOptions::default()).map_err(|e| {
-            CliError::input(format!("task `{}`: {e}", task.name))
-        })?;
+    let workspace = Workspace::new(&robot, &task, &FreedomOptions::default())
+        .map_err(|e| CliError::input(format!("task `{}`: {e}", task.name)))?;
     let freedom = workspace.freedom(&spec).map_err(in_spec)?;
     let gains = if args.scenes == 0 {
         None

@@ -169,7 +169,11 @@ impl Sets {
         if cached != UNKNOWN {
             return cached;
         }
-        let mask = advance(self.masks[set as usize], self.classes[class as usize], self.n);
+        let mask = advance(
+            self.masks[set as usize],
+            self.classes[class as usize],
+            self.n,
+        );
         let id = self.intern(mask);
         self.next[k] = id;
         id
@@ -391,28 +395,40 @@ mod tests {
         count
     }
 
-    fn arb_problem() -> impl Strategy<Value = (u32, u32, u32, u32, Vec<Vec<u32>>, Vec<Option<Vec<u32>>>, usize)> {
-        (2u32..4, 2u32..4).prop_flat_map(|(w, h)| {
-            let cells = w * h;
-            let region = prop::collection::vec(0..cells, 1..3);
-            let line = prop::option::of(prop::collection::vec(0..cells, 1..5));
-            (
-                Just(w),
-                Just(h),
-                0..cells,
-                0..cells,
-                prop::collection::vec(region, 0..4),
-                prop::collection::vec(line, 0..4),
-                0usize..8,
-            )
-        })
-        .prop_map(|(w, h, s, e, regions, mut lines, steps)| {
-            lines.resize(regions.len(), None);
-            if let Some(first) = lines.first_mut() {
-                *first = None;
-            }
-            (w, h, s, e, regions, lines, steps)
-        })
+    /// Grid width and height, start, end, regions, lines and step budget.
+    type Small = (
+        u32,
+        u32,
+        u32,
+        u32,
+        Vec<Vec<u32>>,
+        Vec<Option<Vec<u32>>>,
+        usize,
+    );
+
+    fn arb_problem() -> impl Strategy<Value = Small> {
+        (2u32..4, 2u32..4)
+            .prop_flat_map(|(w, h)| {
+                let cells = w * h;
+                let region = prop::collection::vec(0..cells, 1..3);
+                let line = prop::option::of(prop::collection::vec(0..cells, 1..5));
+                (
+                    Just(w),
+                    Just(h),
+                    0..cells,
+                    0..cells,
+                    prop::collection::vec(region, 0..4),
+                    prop::collection::vec(line, 0..4),
+                    0usize..8,
+                )
+            })
+            .prop_map(|(w, h, s, e, regions, mut lines, steps)| {
+                lines.resize(regions.len(), None);
+                if let Some(first) = lines.first_mut() {
+                    *first = None;
+                }
+                (w, h, s, e, regions, lines, steps)
+            })
     }
 
     proptest! {

@@ -52,7 +52,13 @@ impl Lattice {
     /// The lattice of `resolution` (metres) whose cells have their centres within `reach` of
     /// `base` (the robot base pose) and not below it, aligned on `start`, without cells whose
     /// centre lies inside a fixed object of `world`.
-    pub fn new(world: &World, base: &Pose, reach: f64, start: &Vector3<f64>, resolution: f64) -> Self {
+    pub fn new(
+        world: &World,
+        base: &Pose,
+        reach: f64,
+        start: &Vector3<f64>,
+        resolution: f64,
+    ) -> Self {
         let centre = base.translation.vector;
         let up = base.rotation * Vector3::z();
         let mut origin = Vector3::zeros();
@@ -73,7 +79,10 @@ impl Lattice {
                     if d.norm() > reach || d.dot(&up) < 0.0 {
                         continue;
                     }
-                    if furniture.iter().any(|o| shape_contains(&o.shape, &o.pose, &p)) {
+                    if furniture
+                        .iter()
+                        .any(|o| shape_contains(&o.shape, &o.pose, &p))
+                    {
                         continue;
                     }
                     ids[(x * dims[1] + y) * dims[2] + z] = coords.len() as u32;
@@ -92,11 +101,7 @@ impl Lattice {
         let mut neighbors = Vec::with_capacity(6 * lattice.coords.len());
         for c in &lattice.coords {
             for o in OFFSETS {
-                let g = [
-                    c[0] as i64 + o[0],
-                    c[1] as i64 + o[1],
-                    c[2] as i64 + o[2],
-                ];
+                let g = [c[0] as i64 + o[0], c[1] as i64 + o[1], c[2] as i64 + o[2]];
                 neighbors.push(lattice.id_at(g));
             }
         }
@@ -290,6 +295,9 @@ mod tests {
         assert_eq!(d[c as usize], 6);
         let d = lattice.distances(&[(a, 0), (c, 1)]);
         assert_eq!(d[b as usize], 3);
-        assert_eq!(d[lattice.cell_at(&Vector3::new(0.5, 0.0, 0.5)).unwrap() as usize], 2);
+        assert_eq!(
+            d[lattice.cell_at(&Vector3::new(0.5, 0.0, 0.5)).unwrap() as usize],
+            2
+        );
     }
 }

@@ -119,6 +119,9 @@ pub struct Workspace {
     max_steps: usize,
 }
 
+/// Each keyframe's region and, per keyframe, the line cells of the segment ending at it.
+type SpecCells = (Vec<Vec<u32>>, Vec<Option<Vec<u32>>>);
+
 /// A keyframe's or line's share of the bits a spec loses.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Share {
@@ -223,10 +226,7 @@ impl Workspace {
 
     /// Each keyframe's region and each segment's line cells, `spec` grounded on the objects'
     /// places in the task file.
-    fn regions(
-        &self,
-        spec: &TaskSpec,
-    ) -> Result<(Vec<Vec<u32>>, Vec<Option<Vec<u32>>>), FlexibilityError> {
+    fn regions(&self, spec: &TaskSpec) -> Result<SpecCells, FlexibilityError> {
         if spec.keyframes.len() > MAX_KEYFRAMES {
             return Err(FlexibilityError::TooManyKeyframes(spec.keyframes.len()));
         }
@@ -414,14 +414,20 @@ mod tests {
             let redundant = with_redundant_keyframe(&task, &truth);
             let fewer = ws.traces(&redundant).unwrap();
             assert!(fewer < report.traces, "{name}: a via-point keyframe");
-            assert!(fewer > BigUint::default(), "{name}: a via-point leaves no trace");
+            assert!(
+                fewer > BigUint::default(),
+                "{name}: a via-point leaves no trace"
+            );
 
             assert_eq!(truth.keyframes[1].constraint, Constraint::None, "{name}");
             let mut lined = truth.clone();
             lined.keyframes[1].constraint = Constraint::MoveInLine;
             let fewer = ws.traces(&lined).unwrap();
             assert!(fewer < report.traces, "{name}: an unintended line");
-            assert!(fewer > BigUint::default(), "{name}: the line leaves no trace");
+            assert!(
+                fewer > BigUint::default(),
+                "{name}: the line leaves no trace"
+            );
             println!(
                 "{name}: {bits:.1} bits; with a via-point {:?}; with a line {:?}",
                 log2(&ws.traces(&redundant).unwrap()),

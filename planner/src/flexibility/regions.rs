@@ -194,7 +194,10 @@ mod tests {
             Bounds::symmetric(0.005, 0.05),
         );
         let cells = keyframe_cells(&lattice, &tsr);
-        assert_eq!(cells, vec![lattice.cell_at(&Vector3::new(0.41, 0.11, 0.31)).unwrap()]);
+        assert_eq!(
+            cells,
+            vec![lattice.cell_at(&Vector3::new(0.41, 0.11, 0.31)).unwrap()]
+        );
     }
 
     #[test]
@@ -203,7 +206,11 @@ mod tests {
         // 0.5 m of offset turned by ±0.1 rad of yaw sweeps ±5 cm sideways.
         let mut bw = Bounds::point();
         bw.0[5] = [-0.1, 0.1];
-        let tsr = Tsr::new(pose_from_xyz([0.2, 0.0, 0.4]), pose_from_xyz([0.5, 0.0, 0.0]), bw);
+        let tsr = Tsr::new(
+            pose_from_xyz([0.2, 0.0, 0.4]),
+            pose_from_xyz([0.5, 0.0, 0.0]),
+            bw,
+        );
         let cells = keyframe_cells(&lattice, &tsr);
         let ys: BTreeSet<i64> = cells.iter().map(|&c| lattice.coords(c)[1]).collect();
         assert!(ys.len() >= 5, "{ys:?}");
