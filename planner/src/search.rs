@@ -242,12 +242,12 @@ mod tests {
     #[test]
     fn a_budget_in_milliseconds_is_a_fixed_candidate_count() {
         assert_eq!(PlanBudget::from_millis(0, 4), PlanBudget::SINGLE);
-        let per = MS_PER_KEYFRAME * 4.0;
-        assert_eq!(PlanBudget::from_millis(per as u64, 4).candidates, 2);
-        assert_eq!(
-            PlanBudget::from_millis((10.0 * per) as u64, 4).candidates,
-            11
-        );
+        // 3.8 ms x 4 keyframes = 15.2 ms a candidate.
+        assert_eq!(PlanBudget::from_millis(15, 4).candidates, 1);
+        assert_eq!(PlanBudget::from_millis(16, 4).candidates, 2);
+        assert_eq!(PlanBudget::from_millis(151, 4).candidates, 10);
+        assert_eq!(PlanBudget::from_millis(153, 4).candidates, 11);
+        assert_eq!(PlanBudget::from_millis(200, 0).candidates, 53);
         assert_eq!(PlanBudget::candidates(0), PlanBudget::SINGLE);
     }
 
