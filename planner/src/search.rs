@@ -29,7 +29,8 @@ use akl_tsr::TaskSpec;
 /// Measured by `cargo bench -p akl-planner --bench budget`: the planning time of 21-candidate
 /// searches on the three ground truths divided by candidates and keyframes gave 2.25 ms
 /// (pick_place), 1.93 ms (inspection) and 7.15 ms (assembly, whose pipe grasp plans a line
-/// ahead for every goal it accepts); their mean is 3.8 ms.
+/// ahead for every goal it accepts); their mean is 3.8 ms. A second run (14 candidates) gave
+/// 1.4, 1.9 and 5.3 ms; with 3.8 ms a 200 ms budget then took 107, 154 and 286 ms.
 pub const MS_PER_KEYFRAME: f64 = 3.8;
 
 /// How many whole-spec candidates [`plan_best`] plans.
