@@ -254,23 +254,15 @@ impl Workspace {
         Ok((regions, lines))
     }
 
-    fn problem<'a>(
-        &'a self,
-        regions: &'a [Vec<u32>],
-        lines: &'a [Option<Vec<u32>>],
-    ) -> TraceProblem<'a> {
-        TraceProblem {
+    fn count(&self, regions: &[Vec<u32>], lines: &[Option<Vec<u32>>]) -> BigUint {
+        count_traces(&TraceProblem {
             neighbors: self.lattice.neighbors(),
             start: self.start,
             end: self.start,
             regions,
             lines,
             max_steps: self.max_steps,
-        }
-    }
-
-    fn count(&self, regions: &[Vec<u32>], lines: &[Option<Vec<u32>>]) -> BigUint {
-        count_traces(&self.problem(regions, lines))
+        })
     }
 
     /// The exact number of traces that satisfy `spec`.
@@ -543,6 +535,18 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("resolution"), "{e}");
+        let mut buried = task.clone();
+        let last = buried.teaching.steps.len() - 1;
+        buried.teaching.steps[last] = akl_scene::TeachStep::Move {
+            to: pose_from_xyz([0.35, 0.0, -0.02]),
+            relative_to: WORLD_FRAME.into(),
+        };
+        let e = Workspace::new(&robot, &buried, &FreedomOptions::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("teaching.steps[{last}]: its target is outside")),
+            "{e}"
+        );
         let ws = Workspace::new(&robot, &task, &FreedomOptions::default()).unwrap();
         let mut ghost = truth;
         ghost.keyframes[2].reference = "ghost".into();

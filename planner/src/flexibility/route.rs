@@ -28,8 +28,13 @@ pub fn route_steps(lattice: &Lattice, task: &Task, start: u32) -> Result<usize, 
     for (i, w) in stops.windows(2).enumerate() {
         let d = lattice.distances(&[(w[0], 0)])[w[1] as usize];
         if d == u32::MAX {
+            let to = if i < targets.len() {
+                format!("the target of teaching.steps[{i}]")
+            } else {
+                "the start".to_string()
+            };
             return Err(FlexibilityError::Workspace(format!(
-                "no lattice walk reaches the target of teaching step {i} from the one before"
+                "no lattice walk reaches {to} from the stop before it"
             )));
         }
         steps += d as usize;
