@@ -17,7 +17,10 @@
 //! that end or start at it); each line's, the bits it gains without that line. Shares overlap
 //! and do not add up to the loss. The lattice traces positions only: rotation bounds count
 //! through the positions they let the TCP take (a TSR's offset turning), gripper commands not
-//! at all.
+//! at all. A region is made of whole cells, so a TSR a few millimetres across counts one cell
+//! or several depending on where the cell borders fall: two specs whose keyframes differ by
+//! millimetres can differ by a few bits (the specs learned from the simulated teacher's
+//! demonstration of pick_place have 118.9 bits, the truth 116.6).
 //!
 //! **What the planner gains** ([`gains`]). Over randomized scenes of the task, the budgeted
 //! planner's success rate and the best and median execution time and joint-path length it
@@ -77,7 +80,9 @@ pub struct FreedomOptions {
     ///
     /// 1.25: at 1.5 a report took up to 1.9 s at 5 cm; at 1.25 every ground truth with a
     /// redundant keyframe or an unintended line still has traces (each removes bits rather
-    /// than every trace), which the tests check.
+    /// than every trace), which the tests check, and so do the specs AKL, KD and mACL learn
+    /// from the simulated teacher's demonstrations of the built-in tasks (default profile,
+    /// seed 0; measured with `akl flexibility`).
     pub slack: f64,
 }
 
