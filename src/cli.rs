@@ -68,6 +68,26 @@ pub enum Command {
     /// 2 bad input (a missing or invalid spec file, an unknown task, a spec naming objects the
     /// task does not have, a bad option value or output folder).
     Execute(ExecuteArgs),
+    /// How much freedom a spec leaves the planner: bits of freedom, and what the planner makes
+    /// of it in randomized scenes.
+    ///
+    /// Bits of freedom: the tool centre point's workspace is a lattice of 5 cm cells (within
+    /// the robot's reach, without the cells inside furniture, objects where the task file puts
+    /// them). A trace is a walk over neighbouring cells from the TCP at the ready pose back to
+    /// it, of at most 1.25 times the steps of the task's teaching route, that meets every
+    /// keyframe's region (the cells its TSR reaches) in order and keeps every move_in_line
+    /// segment on the cells of its line. Traces are counted exactly; the measure is log2 of
+    /// the count. Each keyframe's share is the bits the spec gains without it (and without the
+    /// lines at it); each line's, without that line. Adding a keyframe or a line never adds
+    /// bits, so redundant keyframes and unintended lines show as shares that cost bits.
+    ///
+    /// The planner's gains: the spec is planned in --scenes randomized scenes of the task with
+    /// the budget (--budget, as in `akl plan`); printed are the success rate and the best and
+    /// median execution time and joint-path length, beside the nominal-first candidate.
+    ///
+    /// Exit codes: 0 measured; 2 bad input (a missing or invalid spec file, an unknown task, a
+    /// spec naming objects the task does not have); 1 a randomized scene cannot be made.
+    Flexibility(FlexibilityArgs),
     /// The whole loop on a built-in task: teach, learn, then execute with randomized objects.
     ///
     /// The simulated teacher demonstrates the task while the online detector asks about its
@@ -143,12 +163,44 @@ pub struct PlanArgs {
     /// Seed of the planner's random choices (same seed, same plan).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Planning budget in milliseconds: the planner plans whole-spec candidates, spreading
+    /// goals across every TSR and IK branch, and keeps the quickest. The budget is converted
+    /// to a fixed number of candidates (1 + MS / (3.8 ms x keyframes), calibrated on the
+    /// reference machine, see BENCHMARKS.md), so the plan depends on the seed and budget only,
+    /// never on the machine's speed or load. 0 plans one candidate, every keyframe on its
+    /// nominal pose when reachable.
+    #[arg(long, value_name = "MS", default_value_t = 200)]
+    pub budget: u64,
     /// Write the full plan (timed trajectory and gripper events) as JSON to this file.
     #[arg(short = 'o', long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the per-segment summary as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `akl flexibility SPEC --task T ...`
+#[derive(Debug, clap::Args)]
+pub struct FlexibilityArgs {
+    /// The spec file to measure.
+    pub spec: PathBuf,
+    /// Task (built-in name or task file) whose world the spec is measured in.
+    #[arg(long)]
+    pub task: String,
+    /// Randomized scenes to plan the spec in (0: bits of freedom only).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub scenes: usize,
+    /// Planning budget per scene in milliseconds (as `akl plan --budget`).
+    #[arg(long, value_name = "MS", default_value_t = 200)]
+    pub budget: u64,
+    /// Scene i is placed and planned with seed SEED + i.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print the report as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
 }

@@ -201,6 +201,37 @@ fn plan_prints_segments_and_writes_the_plan() {
 }
 
 #[test]
+fn a_budget_plans_more_candidates_keeps_the_quickest_and_is_reproducible() {
+    let plan = |budget: &str| {
+        json(&akl(&[
+            "plan",
+            "tasks/pick_place.truth.json",
+            "--task",
+            "pick_place",
+            "--budget",
+            budget,
+            "--json",
+        ]))
+    };
+    let single = plan("0");
+    assert_eq!(single["candidates"], 1);
+    assert_eq!(single["chosen_candidate"], 0);
+    assert_eq!(single["duration"], single["nominal_duration"]);
+    let searched = plan("100");
+    // 1 + 100 ms / (3.8 ms x 4 keyframes)
+    assert_eq!(searched["candidates"], 7);
+    let (best, nominal) = (
+        searched["duration"].as_f64().unwrap(),
+        searched["nominal_duration"].as_f64().unwrap(),
+    );
+    assert!(best <= nominal, "{best} > {nominal}");
+    assert_eq!(nominal, single["duration"].as_f64().unwrap());
+    let again = plan("100");
+    assert_eq!(again["duration"], searched["duration"]);
+    assert_eq!(again["chosen_candidate"], searched["chosen_candidate"]);
+}
+
+#[test]
 fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
     let o = akl(&["plan", "no/such/spec.json", "--task", "inspection"]);
     assert_eq!(o.status.code(), Some(2));

@@ -4,7 +4,8 @@
 //! in). Its forward kinematics come from the k tree, compiled into flat arrays for speed; its
 //! inverse kinematics are analytic for the Panda and damped least squares otherwise.
 //! Collision checking uses parry3d shapes built from the URDF collision elements and the
-//! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]).
+//! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]),
+//! the quickest of the whole-spec candidates its budget allows ([`PlanBudget`], `search`).
 
 pub mod check;
 pub mod collision;
@@ -12,6 +13,7 @@ pub mod config;
 pub mod contact_rules;
 pub mod error;
 pub mod fk;
+pub mod flexibility;
 pub mod geometry;
 pub mod goal;
 pub mod ik;
@@ -20,6 +22,7 @@ pub mod parry_convert;
 pub mod plan;
 pub mod robot;
 pub mod rrt;
+pub mod search;
 pub mod shortcut;
 pub mod space;
 pub mod task;
@@ -31,4 +34,5 @@ pub use error::{IkError, PlanError, RobotError};
 pub use geometry::{Geometry, LinkShape};
 pub use plan::{GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind};
 pub use robot::Robot;
+pub use search::{plan_best, BestPlan, CandidateOutcome, PlanBudget};
 pub use task::{plan_task, PlanOptions};

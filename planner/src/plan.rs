@@ -174,6 +174,15 @@ impl Plan {
         before + f * (s.width - before)
     }
 
+    /// Total joint-space length of the arm's motion (radians, Euclidean over the joints),
+    /// summed over the segments' waypoints.
+    pub fn joint_path_length(&self) -> f64 {
+        self.segments
+            .iter()
+            .map(|s| crate::space::path_length(&s.waypoints))
+            .sum()
+    }
+
     /// The plan as pretty JSON.
     pub fn to_json(&self) -> serde_json::Result<String> {
         akl_tsr::io::to_readable_json(self)

@@ -34,13 +34,14 @@
 
 use crate::collision::{Allowances, Checker, Held, RobotCollision, Scene};
 use crate::error::PlanError;
-use crate::goal::{find_goals, GoalFailure, GoalOptions};
+use crate::goal::{find_goals, GoalFailure, GoalOptions, GoalStrategy};
 use crate::line::{distance_to_segment, plan_line, LineFailure, LineOptions};
 use crate::plan::{
     GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind, PLAN_VERSION,
 };
 use crate::robot::Robot;
 use crate::rrt::{rrt_connect, RrtOptions, RrtResult};
+use crate::search::{plan_best, PlanBudget};
 use crate::shortcut::shortcut;
 use crate::space::Space;
 use crate::timing::{self, Timing};
@@ -68,6 +69,10 @@ pub struct PlanOptions {
     pub line: LineOptions,
     /// Pause after the gripper has moved, before the arm moves on (seconds).
     pub gripper_settle: f64,
+    /// How many whole-spec candidates to plan, keeping the quickest (see `search`). The
+    /// default, one candidate, is the nominal-first plan; `PlanBudget::from_millis` turns a
+    /// planning time into a candidate count.
+    pub budget: PlanBudget,
 }
 
 impl Default for PlanOptions {
@@ -80,6 +85,7 @@ impl Default for PlanOptions {
             goals: GoalOptions::default(),
             line: LineOptions::default(),
             gripper_settle: 0.2,
+            budget: PlanBudget::SINGLE,
         }
     }
 }
@@ -137,9 +143,21 @@ struct Planner<'a> {
     just_released: Option<String>,
 }
 
-/// Plans `spec` for `robot` in `world`: one timed joint trajectory with gripper events.
+/// Plans `spec` for `robot` in `world`: one timed joint trajectory with gripper events, the
+/// quickest of the candidates `options.budget` allows (see [`plan_best`]).
 /// Errors name the keyframe or segment and the reason.
 pub fn plan_task(
+    robot: &Robot,
+    spec: &TaskSpec,
+    world: &World,
+    options: &PlanOptions,
+) -> Result<Plan, PlanError> {
+    plan_best(robot, spec, world, options).map(|best| best.plan)
+}
+
+/// Plans one candidate: every keyframe in turn, its goals chosen by
+/// `options.goals.strategy`, every random choice drawn from `options.seed`.
+pub(crate) fn plan_candidate(
     robot: &Robot,
     spec: &TaskSpec,
     world: &World,
@@ -441,18 +459,28 @@ impl<'a> Planner<'a> {
                 let targets =
                     crate::goal::tsr_poses(&kf.tsr, self.options.goals.poses, &mut self.rng);
                 let mut first_failure = None;
-                let mut found = None;
+                let mut found: Option<(f64, PlannedLine)> = None;
+                let mut planned_lines = 0;
                 for target in &targets {
                     match self.line_to(target, &allow) {
                         Ok(planned) => {
-                            found = Some(planned);
-                            break;
+                            planned_lines += 1;
+                            let time = self.line_time(&planned.path);
+                            if found.as_ref().is_none_or(|(best, _)| time < *best) {
+                                found = Some((time, planned));
+                            }
+                            if self.options.goals.strategy == GoalStrategy::Nominal
+                                || planned_lines >= self.options.goals.enough
+                            {
+                                break;
+                            }
                         }
                         Err(failure) => {
                             first_failure.get_or_insert(failure);
                         }
                     }
                 }
+                let found = found.map(|(_, planned)| planned);
                 match (found, first_failure) {
                     (Some(planned), _) => planned,
                     (None, Some(failure)) => return Err(line_error(segment, &failure)),
@@ -471,6 +499,16 @@ impl<'a> Planner<'a> {
             planned,
             started.elapsed().as_secs_f64(),
         )
+    }
+
+    /// Seconds a straight segment along `path` takes (timed as `push` times it).
+    fn line_time(&self, path: &[Vec<f64>]) -> f64 {
+        timing::cubic(
+            path,
+            self.robot.velocity_limits(),
+            self.robot.acceleration_limits(),
+        )
+        .duration()
     }
 
     /// Lifts a held object that still rests on its support, back along the tool axis.

@@ -3,6 +3,7 @@
 mod calibrate;
 mod demo;
 mod execute;
+mod flexibility;
 mod learn;
 mod plan;
 mod robot;
@@ -29,6 +30,7 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Robot(cmd) => robot::run(cmd),
         Command::Plan(args) => plan::run(args),
         Command::Execute(args) => execute::run(args),
+        Command::Flexibility(args) => flexibility::run(args),
         Command::Demo(args) => demo::run(args),
     }
 }

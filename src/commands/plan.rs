@@ -5,7 +5,7 @@ use super::robot::load as load_robot;
 use crate::cli::PlanArgs;
 use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
-use akl_planner::{plan_task, GripperAction, PlanOptions};
+use akl_planner::{plan_best, GripperAction, PlanBudget, PlanOptions};
 use akl_scene::builtin;
 use akl_tsr::{FileError, TaskSpec};
 use serde::Serialize;
@@ -37,6 +37,11 @@ struct PlanSummary {
     task: String,
     robot: String,
     seed: u64,
+    budget_ms: u64,
+    candidates: usize,
+    candidates_planned: usize,
+    chosen_candidate: usize,
+    nominal_duration: Option<f64>,
     duration: f64,
     planning_time: f64,
     segments: Vec<SegmentSummary>,
@@ -60,15 +65,19 @@ pub fn run(args: PlanArgs) -> CliResult {
         })?;
     let options = PlanOptions {
         seed: args.seed,
+        budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
         ..PlanOptions::default()
     };
-    let plan = plan_task(&robot, &spec, &task.world, &options).map_err(|e| {
+    let started = std::time::Instant::now();
+    let best = plan_best(&robot, &spec, &task.world, &options).map_err(|e| {
         CliError::internal(format!(
             "cannot plan {} in task `{}`: {e}",
             args.spec.display(),
             task.name
         ))
     })?;
+    let planning_time = started.elapsed().as_secs_f64();
+    let plan = &best.plan;
     if let Some(out) = &args.output {
         plan.save(out).map_err(|e| {
             CliError::internal(format!("{}: cannot write the plan: {e}", out.display()))
@@ -79,8 +88,13 @@ pub fn run(args: PlanArgs) -> CliResult {
         task: task.name.clone(),
         robot: robot.name().to_string(),
         seed: args.seed,
+        budget_ms: args.budget,
+        candidates: best.candidates.len(),
+        candidates_planned: best.candidates.iter().filter(|c| c.result.is_ok()).count(),
+        chosen_candidate: best.chosen,
+        nominal_duration: best.nominal_duration(),
         duration: plan.duration,
-        planning_time: plan.segments.iter().map(|s| s.planning_time).sum(),
+        planning_time,
         segments: plan
             .segments
             .iter()
@@ -123,6 +137,16 @@ pub fn run(args: PlanArgs) -> CliResult {
         summary.segments.len(),
         summary.duration,
         summary.planning_time * 1e3
+    );
+    let nominal = summary
+        .nominal_duration
+        .map_or("failed".to_string(), |d| format!("{d:.2} s"));
+    println!(
+        "budget {} ms: {} candidates ({} planned), kept candidate {}; the nominal-first candidate: {nominal}",
+        summary.budget_ms,
+        summary.candidates,
+        summary.candidates_planned,
+        summary.chosen_candidate
     );
     let mut table = Table::new([
         "#",
