@@ -5,13 +5,14 @@
 //! single-threaded, so a batch gives the same reports whatever the number of threads.
 
 use crate::error::ExecError;
-use crate::report::{BatchReport, TrialReport};
+use crate::report::{BatchReport, Settings, TrialReport};
 use crate::trace::{write_trace, TraceInput, TRACE_RATE};
 use crate::trial::{run_trial, trial_world, ExecOptions, Setup, Timeline};
 use akl_planner::Robot;
 use akl_scene::{Task, World};
 use akl_tsr::TaskSpec;
 use rayon::prelude::*;
+use sha2::{Digest, Sha256};
 use std::path::Path;
 use std::time::Instant;
 
@@ -98,6 +99,7 @@ impl<'a> Batch<'a> {
             reports,
             self.options.jobs,
             started.elapsed().as_secs_f64(),
+            settings(self.setup.options, self.setup.spec),
         ))
     }
 
@@ -147,6 +149,42 @@ impl<'a> Batch<'a> {
     pub fn setup(&self) -> &Setup<'a> {
         &self.setup
     }
+}
+
+/// The settings of a batch executing `spec` with `options`, for its report.
+pub fn settings(options: &ExecOptions, spec: &TaskSpec) -> Settings {
+    let slack = options.keyframe_slack();
+    Settings {
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        spec_hash: spec_hash(spec),
+        pose_noise_position: options.noise.position,
+        pose_noise_yaw: options.noise.yaw,
+        servo_frequency: options.drives.frequency,
+        servo_damping_ratio: options.drives.damping_ratio,
+        torque_limits: options.drives.torque_limits.clone(),
+        grasp_force: options.drives.grasp_force,
+        step: options.physics.dt,
+        solver_iterations: options.physics.solver_iterations,
+        line_tolerance: options.line_tolerance,
+        keyframe_position_slack: slack.position,
+        keyframe_angle_slack: slack.angle,
+        slip_limit: options.slip_limit,
+        drop_limit: options.drop_limit,
+        grasp_centre_offset: options.grasp.max_centre_offset,
+        grasp_overlap: options.grasp.min_overlap,
+        contacts: options.contacts,
+        settle: options.settle,
+    }
+}
+
+/// SHA-256 (hex) of the spec's canonical JSON: the same spec gives the same hash whatever its
+/// file's layout.
+pub fn spec_hash(spec: &TaskSpec) -> String {
+    let text = spec.to_json();
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// The seed of trial `i` of a batch seeded `seed`.

@@ -1,7 +1,7 @@
 //! What execution found: one [`TrialReport`] per trial and a [`BatchReport`] over a batch,
 //! both serializable to `report.json`.
 
-use crate::contacts::{Collision, Extreme};
+use crate::contacts::{Collision, ContactLimits, Extreme};
 use akl_scene::GoalCheck;
 use akl_tsr::PoseJson;
 use serde::Serialize;
@@ -255,6 +255,49 @@ impl TrialReport {
     }
 }
 
+/// The settings a batch ran with, so that a report says what it measured against.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Settings {
+    /// Version of the execution engine (the `akl-exec` crate).
+    pub version: String,
+    /// SHA-256 of the spec's canonical JSON.
+    pub spec_hash: String,
+    /// Perception error: standard deviation of position along world x and y (metres).
+    pub pose_noise_position: f64,
+    /// Perception error: standard deviation of the turn about the vertical (radians).
+    pub pose_noise_yaw: f64,
+    /// Natural frequency of the joint servos (Hz).
+    pub servo_frequency: f64,
+    /// Damping ratio of the joint servos.
+    pub servo_damping_ratio: f64,
+    /// Joint torque limits (N·m).
+    pub torque_limits: Vec<f64>,
+    /// Force the hand holds a grasped object with (N).
+    pub grasp_force: f64,
+    /// Simulation step (seconds).
+    pub step: f64,
+    /// Constraint solver iterations per step.
+    pub solver_iterations: usize,
+    /// How far the TCP may leave a line (metres).
+    pub line_tolerance: f64,
+    /// Slack added to keyframe position bounds (metres).
+    pub keyframe_position_slack: f64,
+    /// Slack added to keyframe angle bounds (radians).
+    pub keyframe_angle_slack: f64,
+    /// How far a held object may move in the hand (metres).
+    pub slip_limit: f64,
+    /// How far a released object may fall (metres).
+    pub drop_limit: f64,
+    /// Largest distance of a grasped object's centre from the pads' mid-plane (metres).
+    pub grasp_centre_offset: f64,
+    /// Smallest share of a pad's face a grasped object must cover.
+    pub grasp_overlap: f64,
+    /// Contact depth and force limits.
+    pub contacts: ContactLimits,
+    /// Settling time after the plan (seconds).
+    pub settle: f64,
+}
+
 /// The outcome of a batch of trials of one spec on one task.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchReport {
@@ -286,12 +329,16 @@ pub struct BatchReport {
     pub wall_seconds: f64,
     /// Worker threads used.
     pub jobs: usize,
+    /// What the trials measured against.
+    pub settings: Settings,
     /// Every trial, in order.
     pub reports: Vec<TrialReport>,
 }
 
 impl BatchReport {
-    /// Summarizes `reports` (in trial order) run on `jobs` threads in `wall_seconds`.
+    /// Summarizes `reports` (in trial order) run on `jobs` threads in `wall_seconds` with
+    /// `settings`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         task: &str,
         method: &str,
@@ -300,6 +347,7 @@ impl BatchReport {
         reports: Vec<TrialReport>,
         jobs: usize,
         wall_seconds: f64,
+        settings: Settings,
     ) -> BatchReport {
         let mut failures: BTreeMap<Cause, usize> = BTreeMap::new();
         for r in &reports {
@@ -328,6 +376,7 @@ impl BatchReport {
             sim_seconds_per_trial: sim / n,
             wall_seconds,
             jobs,
+            settings,
             reports,
         }
     }
@@ -411,8 +460,17 @@ mod tests {
             ],
             2,
             1.0,
+            crate::batch::settings(
+                &crate::trial::ExecOptions::default(),
+                &akl_scene::builtin::task("inspection")
+                    .unwrap()
+                    .unwrap()
+                    .truth
+                    .unwrap(),
+            ),
         );
         assert_eq!((b.trials, b.passed), (3, 1));
+        assert_eq!(b.settings.spec_hash.len(), 64);
         assert_eq!(b.failures[&Cause::Collision], 1);
         assert_eq!(b.failures[&Cause::GoalNotMet], 1);
         assert_eq!(b.failures[&Cause::Unreachable], 1);

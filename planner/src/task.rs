@@ -1025,6 +1025,11 @@ impl<'a> Planner<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::check::{recheck, RecheckOptions};
+    use crate::robot::{PANDA_TOML, PANDA_URDF};
+    use akl_scene::{builtin, randomize, Object};
+    use proptest::prelude::*;
+    use std::path::Path;
 
     #[test]
     fn a_grasped_object_ends_centred_between_the_fingers() {

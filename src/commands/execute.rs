@@ -202,6 +202,29 @@ pub(crate) fn print_executed(x: &Executed) {
         row(&format!("failed: {cause}"), n.to_string());
     }
     row("worst line deviation", millimetres(r.worst_line_deviation));
+    let worst = |f: &dyn Fn(&akl_exec::report::TrialReport) -> f64| {
+        r.reports.iter().map(f).fold(0.0, f64::max)
+    };
+    row(
+        "worst tracking error",
+        format!("{:.2} mm", worst(&|t| t.tracking.max) * 1e3),
+    );
+    row(
+        "deepest contact",
+        format!("{:.2} mm", worst(&|t| t.deepest_contact.value) * 1e3),
+    );
+    row(
+        "largest contact force",
+        format!("{:.1} N", worst(&|t| t.largest_force.value)),
+    );
+    row(
+        "perception noise (σ)",
+        format!(
+            "{:.1} mm, {:.1}°",
+            r.settings.pose_noise_position * 1e3,
+            r.settings.pose_noise_yaw.to_degrees()
+        ),
+    );
     row(
         "time per trial",
         format!(
