@@ -165,36 +165,6 @@ fn bad_input_is_named_and_exits_2() {
     assert!(!dir.join("x.mcap").exists() && !dir.join("x.txt").exists());
 }
 
-/// A JSONL stream a robot driver would send: the frames and keyframe marks of a simulated
-/// teaching, without the learner's own detector states and dialogue.
-fn driver_stream(dir: &Path, task: &str) -> String {
-    let o = akl_in(
-        dir,
-        &[
-            "teach",
-            "--task",
-            task,
-            "--answers",
-            "all-yes",
-            "-o",
-            "src.jsonl",
-        ],
-    );
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    std::fs::read_to_string(dir.join("src.jsonl"))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
-        .map(|l| {
-            format!(
-                "{}\n",
-                l.replace(",\"constrained\":true", "")
-                    .replace(",\"constrained\":false", "")
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn a_driver_streams_frames_on_stdin() {
     let dir = scratch("stdin");
@@ -261,28 +231,6 @@ fn a_stream_recorded_without_the_detector_is_replayed_by_learn() {
         &["score", "s.json", "--truth", "inspection", "--json"],
     );
     assert_eq!(json(&o)["success"], true);
-}
-
-fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
-    use std::os::fd::AsRawFd;
-    use std::os::unix::process::CommandExt;
-    let slave = pty.slave.as_raw_fd();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
-    cmd.args(args)
-        .current_dir(dir)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    // SAFETY: only async-signal-safe calls between fork and exec.
-    unsafe {
-        cmd.pre_exec(move || {
-            if libc::setsid() < 0 || libc::ioctl(slave, libc::TIOCSCTTY, 0) < 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-    cmd.spawn().unwrap()
 }
 
 #[test]

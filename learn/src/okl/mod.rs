@@ -10,7 +10,8 @@
 //!
 //! Cost: every step is one pass over its frames; the fitting errors of a segment are computed
 //! once per constrained region in it, so the whole is linear in the number of frames for a
-//! bounded number of detected regions per segment.
+//! bounded number of detected regions per segment — except the TV denoising of those errors,
+//! linear in practice but quadratic on adversarial signals (see [`crate::tvd`]).
 
 pub mod constraint;
 pub mod keyframes;
@@ -83,10 +84,30 @@ pub struct OklParams {
     /// D_F, the default teacher's `inspection` lines kept 5 cm of the following reach and their
     /// ends came out 2–6 cm long (`learn/tests/methods.rs`).
     pub overshoot: f64,
-    /// λ of the TV denoising of the fitting error (metres × frames): 0.002. The error signal
-    /// is the perpendicular distance in metres; at 100 Hz and a few mm of hand noise this
-    /// flattens the error on the line into one plateau while the rise off the line survives
-    /// (measured on the synthetic demos of the tests: boundaries within 2 cm of the true ones).
+    /// How far (metres) the hand had already moved along a line when the detector switched on,
+    /// at the least: the filtered points the tank needs ([`Calibration::switch_points`]) times
+    /// D_F, 0.1 m by default (the errors of those points, each measured against the two points
+    /// before it, were all straight). The line is fitted from that far before the detected
+    /// region, within its segment. The thesis starts the fit at the region's start; a teacher
+    /// who slows down at the end of a short line (the first-time teacher's 26 cm pipe slide,
+    /// `assembly` seed 0) is detected only 2–3 cm before the line ends, too little to fit a
+    /// direction to, and the line was lost (`tvd_lambda_survey` in `learn/tests/fidelity.rs`).
+    pub lead: f64,
+    /// λ of the TV denoising of the fitting error (metres × frames): 0.002.
+    ///
+    /// The thesis gives λ = 0.6 (§4.4) without the unit of the signal it smooths, and uses the
+    /// same 0.6 for its mACL baseline's unitless inlier ratio (after Liu et al.), so the number
+    /// does not carry over as is. Here the fitting error is in metres and λ weighs the plain
+    /// sum of jumps (see [`crate::tvd`]): a plateau of m frames moves at most λ/m, so 0.002
+    /// lets a 100-frame (1 s) plateau move 0.02 mm. Read with the error in millimetres, the
+    /// thesis's 0.6 would be 0.0006 here; in centimetres, 0.006; in metres, 0.6. Measured with
+    /// `cargo test --release -p akl-learn --test fidelity tvd_lambda_survey -- --ignored
+    /// --nocapture` (the careful and first-time teachers' inspection and assembly demos, 10
+    /// seeds each, answers right): every λ from 0.0005 to 0.2 learns all 40 exactly with line
+    /// ends within 1 cm; 0.6 too but with ends up to 1.7 cm off; 2 learns 33 and 6 only 20. The
+    /// threshold σ = max(e_l) + ε, measured on the same smoothed signal, absorbs the smoothing,
+    /// so λ matters little below a few tenths; 0.002 sits in the middle of the flat range on a
+    /// log scale and is unchanged from before the survey.
     pub tvd_lambda: f64,
     /// ε of σ = max(e_l) + ε: 0.001 m, one millimetre above the flattened error on the line.
     pub epsilon: f64,
@@ -111,6 +132,7 @@ impl OklParams {
         OklParams {
             filter_distance: calibration.filter_distance,
             overshoot: calibration.filter_distance * calibration.switch_points() as f64,
+            lead: calibration.filter_distance * calibration.switch_points() as f64,
             tvd_lambda: 0.002,
             epsilon: 0.001,
             combine_distance: 0.01,
@@ -122,6 +144,7 @@ impl OklParams {
         ConstraintParams {
             filter_distance: self.filter_distance,
             overshoot: self.overshoot,
+            lead: self.lead,
             tvd_lambda: self.tvd_lambda,
             epsilon: self.epsilon,
         }

@@ -30,6 +30,11 @@ pub struct TeacherProfile {
     pub curvature: f64,
     /// Chance that a free motion is made in an unintended straight line.
     pub unintended_line_chance: f64,
+    /// How much a suggestion ("Please do not move in a line unless the robot must move in a
+    /// line.") lowers that chance for the rest of the demonstration, as a fraction: 0 ignores
+    /// suggestions, 1 never moves straight again unless required. The thesis lets the teacher
+    /// accept or decline a suggestion and does not measure which; the presets take half.
+    pub suggestion_uptake: f64,
     /// Chance that an answer to "Do I have to move in a straight line there?" is wrong.
     pub wrong_answer_rate: f64,
     /// Chance that an answer is "I don't know" instead.
@@ -56,6 +61,7 @@ impl TeacherProfile {
             sensor_noise: 0.0005,
             curvature: 0.25,
             unintended_line_chance: 0.0,
+            suggestion_uptake: 0.5,
             wrong_answer_rate: 0.0,
             unknown_answer_rate: 0.0,
             keyframes: KeyframeHabit {
@@ -79,6 +85,7 @@ impl TeacherProfile {
             sensor_noise: 0.0005,
             curvature: 0.2,
             unintended_line_chance: 0.25,
+            suggestion_uptake: 0.5,
             wrong_answer_rate: 0.2,
             unknown_answer_rate: 0.1,
             keyframes: KeyframeHabit {
@@ -90,11 +97,12 @@ impl TeacherProfile {
         }
     }
 
-    /// A teacher who always moves straight in free space (to exercise the dialogue), otherwise
-    /// careful.
+    /// A teacher who always moves straight in free space, whatever it is told (to exercise
+    /// the dialogue), otherwise careful.
     pub fn straight() -> Self {
         TeacherProfile {
             unintended_line_chance: 1.0,
+            suggestion_uptake: 0.0,
             ..TeacherProfile::careful()
         }
     }
@@ -116,6 +124,7 @@ impl TeacherProfile {
     pub fn validate(&self) -> Result<(), String> {
         let probabilities = [
             ("unintended_line_chance", self.unintended_line_chance),
+            ("suggestion_uptake", self.suggestion_uptake),
             ("wrong_answer_rate", self.wrong_answer_rate),
             ("unknown_answer_rate", self.unknown_answer_rate),
             ("keyframes.miss_chance", self.keyframes.miss_chance),
