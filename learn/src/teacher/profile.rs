@@ -5,8 +5,13 @@ use serde::{Deserialize, Serialize};
 /// When a teacher marks keyframes in a keyframe demonstration (KD).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct KeyframeHabit {
-    /// Chance of forgetting to mark the end of a step.
+    /// Chance of forgetting to mark the end of a step the task needs a keyframe at (a grasp,
+    /// a release, either end of a line).
     pub miss_chance: f64,
+    /// Chance of marking the end of a free move the task needs no keyframe at (such as the
+    /// return to the start): a teacher told to mark as few keyframes as needed (thesis §4.1)
+    /// who marks it anyway.
+    pub free_move_mark: f64,
     /// Extra marks per step in the middle of the motion (a teacher who marks too often).
     pub extra_per_step: f64,
 }
@@ -51,8 +56,8 @@ pub struct TeacherProfile {
 pub const MAX_RATE: f64 = 1000.0;
 
 impl TeacherProfile {
-    /// The careful teacher: no unintended lines, correct answers, marks every step. Noise of a
-    /// steady hand (1 mm tremor, 0.5 mm sensor noise).
+    /// The careful teacher: no unintended lines, correct answers, marks every keyframe the task
+    /// needs and no other. Noise of a steady hand (1 mm tremor, 0.5 mm sensor noise).
     pub fn careful() -> Self {
         TeacherProfile {
             speed: 0.12,
@@ -66,6 +71,7 @@ impl TeacherProfile {
             unknown_answer_rate: 0.0,
             keyframes: KeyframeHabit {
                 miss_chance: 0.0,
+                free_move_mark: 0.0,
                 extra_per_step: 0.0,
             },
             rate: 100.0,
@@ -90,6 +96,7 @@ impl TeacherProfile {
             unknown_answer_rate: 0.1,
             keyframes: KeyframeHabit {
                 miss_chance: 0.15,
+                free_move_mark: 0.5,
                 extra_per_step: 0.5,
             },
             rate: 100.0,
@@ -128,6 +135,7 @@ impl TeacherProfile {
             ("wrong_answer_rate", self.wrong_answer_rate),
             ("unknown_answer_rate", self.unknown_answer_rate),
             ("keyframes.miss_chance", self.keyframes.miss_chance),
+            ("keyframes.free_move_mark", self.keyframes.free_move_mark),
         ];
         if let Some((name, v)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
             return Err(format!("{name} = {v} is not a probability"));

@@ -157,7 +157,13 @@ impl<'a> SimulatedTeacher<'a> {
         };
         let first_frame = recorder.out.demo.len();
         recorder.travel(target, path);
-        recorder.mark_keyframes(first_frame);
+        let needed = match step {
+            TeachStep::Move { .. } => {
+                matches!(steps.get(i + 1), Some(TeachStep::Line { .. }))
+            }
+            _ => true,
+        };
+        recorder.mark_keyframes(first_frame, needed);
         match step {
             TeachStep::Grasp { object, tcp } => {
                 let index = recorder.object_index(object).map_err(at)?;
@@ -338,8 +344,10 @@ impl Recorder<'_> {
         self.out.unintended_line.push(unintended);
     }
 
-    /// Marks the end of the motion just made, and extra frames inside it, per the habit.
-    fn mark_keyframes(&mut self, first_frame: usize) {
+    /// Marks the end of the motion just made, and extra frames inside it, per the habit: the
+    /// end of a step the task needs a keyframe at (`needed`: a grasp, a release, a line's
+    /// ends) unless forgotten, the end of any other free move by habit.
+    fn mark_keyframes(&mut self, first_frame: usize, needed: bool) {
         let last = self.out.demo.len() - 1;
         let habit = self.profile.keyframes;
         let whole = habit.extra_per_step.floor() as usize;
@@ -348,7 +356,12 @@ impl Recorder<'_> {
             .filter(|_| last > first_frame + 2)
             .map(|_| self.rng.gen_range(first_frame + 1..last))
             .collect();
-        if !self.rng.gen_bool(habit.miss_chance) {
+        let marked = if needed {
+            !self.rng.gen_bool(habit.miss_chance)
+        } else {
+            self.rng.gen_bool(habit.free_move_mark)
+        };
+        if marked {
             marks.push(last);
         }
         marks.sort_unstable();
