@@ -183,6 +183,9 @@ pub struct SimulatedTeaching {
     pub stopped: bool,
     /// Suggestions the learner made.
     pub suggestions: usize,
+    /// The teacher's chance of an unintended line at the end, lowered by the suggestions it
+    /// heeded (what it carries into its next demonstration).
+    pub unintended_line_chance: f64,
 }
 
 /// The simulated teacher with `profile` demonstrates `task` in `world` step by step while a
@@ -233,7 +236,9 @@ pub fn teach_simulated(
         }
     };
     let suggestions = session.suggestions();
+    let unintended_line_chance = teacher.unintended_line_chance();
     Ok(SimulatedTeaching {
+        unintended_line_chance,
         sim: teacher.finish(),
         demo: session.finish()?,
         stopped,

@@ -2,6 +2,7 @@
 
 mod calibrate;
 mod demo;
+mod eval;
 mod execute;
 mod learn;
 mod plan;
@@ -30,6 +31,7 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Plan(args) => plan::run(args),
         Command::Execute(args) => execute::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Eval(args) => eval::run(args),
     }
 }
 

@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
 use super::profile::TeacherProfile;
-use crate::demo::{Demo, DemoHeader};
+use crate::demo::{Demo, DemoHeader, DialogueEvent, DialogueKind};
 
 /// Fastest hand rotation the simulated teacher makes (rad/s).
 const ROTATION_SPEED: f64 = 0.8;
@@ -36,6 +36,22 @@ impl SimulatedDemo {
         self.intended_line[from..=frame.min(self.intended_line.len() - 1)]
             .iter()
             .any(|x| *x)
+    }
+
+    /// The recording with the teacher's keyframe marks as dialogue events, as a keyframe
+    /// demonstration (KD) records it: no detector ran, no question was asked.
+    pub fn with_marks(&self) -> Demo {
+        let mut demo = self.demo.clone();
+        demo.events = self
+            .marked_keyframes
+            .iter()
+            .map(|&frame| DialogueEvent {
+                t: demo.times[frame],
+                frame,
+                kind: DialogueKind::Keyframe,
+            })
+            .collect();
+        demo
     }
 }
 
