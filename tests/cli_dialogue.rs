@@ -12,22 +12,13 @@ const SUGGESTION: &str = "Please do not move in a line unless the robot must mov
 /// returns what the terminal showed after the answer, the summary and the recording.
 fn answer_on_the_terminal(name: &str, key: u8) -> (String, serde_json::Value, String) {
     let dir = scratch(name);
-    let stream = driver_stream(&dir, "inspection");
-    let mut pty = open_pty();
-    let mut child = spawn_on_tty(
-        &dir,
-        &["teach", "--teacher", "stdin", "-o", "tty.jsonl", "--json"],
-        &pty,
-    );
-    let mut stdin = child.stdin.take().unwrap();
-    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
-    let mut seen = String::new();
+    let Asked {
+        child,
+        mut pty,
+        feeder,
+        ..
+    } = teach_until_asked(&dir, "tty.jsonl");
     let mut buf = [0u8; 4096];
-    while !seen.contains("answer [y/n/?]") {
-        let n = pty.master.read(&mut buf).unwrap();
-        assert!(n > 0, "the terminal closed before a question: {seen}");
-        seen.push_str(&text(&buf[..n]));
-    }
     pty.master.write_all(&[key]).unwrap();
     feeder.join().unwrap().unwrap();
     let o = child.wait_with_output().unwrap();

@@ -2,7 +2,7 @@
 //! binary: files written, exit codes, live teaching from standard input with answers typed on a
 //! pseudo-terminal, and recordings that survive SIGKILL and end cleanly on Ctrl-C.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -236,23 +236,13 @@ fn a_stream_recorded_without_the_detector_is_replayed_by_learn() {
 #[test]
 fn questions_are_answered_on_the_terminal() {
     let dir = scratch("tty");
-    let stream = driver_stream(&dir, "inspection");
-    let mut pty = open_pty();
-    let mut child = spawn_on_tty(
-        &dir,
-        &["teach", "--teacher", "stdin", "-o", "tty.jsonl", "--json"],
-        &pty,
-    );
-    let mut stdin = child.stdin.take().unwrap();
-    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
     // Read the question off the terminal, then type the answer.
-    let mut seen = String::new();
-    let mut buf = [0u8; 4096];
-    while !seen.contains("answer [y/n/?]") {
-        let n = pty.master.read(&mut buf).unwrap();
-        assert!(n > 0, "the terminal closed before a question: {seen}");
-        seen.push_str(&text(&buf[..n]));
-    }
+    let Asked {
+        child,
+        mut pty,
+        feeder,
+        seen,
+    } = teach_until_asked(&dir, "tty.jsonl");
     assert!(
         seen.contains("Do I have to move in a straight line there?"),
         "{seen}"

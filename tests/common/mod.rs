@@ -135,3 +135,44 @@ pub fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
     }
     cmd.spawn().unwrap()
 }
+
+/// A live teaching session (`akl teach --teacher stdin --json`) fed the inspection task's
+/// driver stream, with its questions on a pseudo-terminal, stopped at its first question.
+pub struct Asked {
+    /// The running `akl`.
+    pub child: Child,
+    /// The terminal it asks on.
+    pub pty: Pty,
+    /// The thread writing the stream to its standard input.
+    pub feeder: std::thread::JoinHandle<std::io::Result<()>>,
+    /// What the terminal showed up to the first answer prompt.
+    pub seen: String,
+}
+
+/// Starts a live teaching session in `dir` recording to `output` and reads the terminal up to
+/// the first answer prompt.
+pub fn teach_until_asked(dir: &Path, output: &str) -> Asked {
+    use std::io::{Read, Write};
+    let stream = driver_stream(dir, "inspection");
+    let mut pty = open_pty();
+    let mut child = spawn_on_tty(
+        dir,
+        &["teach", "--teacher", "stdin", "-o", output, "--json"],
+        &pty,
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
+    let mut seen = String::new();
+    let mut buf = [0u8; 4096];
+    while !seen.contains("answer [y/n/?]") {
+        let n = pty.master.read(&mut buf).unwrap();
+        assert!(n > 0, "the terminal closed before a question: {seen}");
+        seen.push_str(&text(&buf[..n]));
+    }
+    Asked {
+        child,
+        pty,
+        feeder,
+        seen,
+    }
+}
