@@ -96,7 +96,8 @@ pub enum Command {
     /// calibrations, every trial with its spec, and the tables) and four SVG figures:
     /// keyframes.svg, poses.svg, constraint_length.svg (missed + incorrect per trial, cf.
     /// Figures 4-2b, 4-4b, 4-6a) and runtime.svg (log scale, cf. Figure 4-9). A progress bar
-    /// shows on standard error when it is a terminal. The same seed gives the same study.
+    /// shows on standard error when it is a terminal. The same seed gives the same study
+    /// (runtimes aside).
     ///
     /// Exit codes: 0 the study ran; 2 bad input (no participants, --execute 0, an output
     /// folder that is a file); 1 anything else.
@@ -113,7 +114,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Execute every learned spec N times in simulation with the objects moved around, and
-    /// report the pass rates (slow: each trial plans and simulates the whole task).
+    /// report the pass rates (each run plans and simulates the whole task).
     #[arg(long, value_name = "N")]
     pub execute: Option<usize>,
     /// Folder for trials.csv, trials.json and the SVG figures (created if missing).
