@@ -3,8 +3,8 @@
 use std::fs::{File, OpenOptions};
 
 use akl_learn::dialogue::{AllYes, AnswerSource, ListedAnswers, Terminal};
-use akl_learn::teach::oracle_for;
-use akl_learn::teacher::{SimulatedDemo, TeacherProfile};
+use akl_learn::teach::oracle;
+use akl_learn::teacher::TeacherProfile;
 
 use crate::exit::CliError;
 use crate::tty::KeyReader;
@@ -13,20 +13,20 @@ use crate::tty::KeyReader;
 /// can stream in on standard input at the same time.
 const TTY: &str = "/dev/tty";
 
-/// The answer source `spec` names: `oracle` (needs the simulated teacher), `all-yes`,
-/// `terminal`, or a comma-separated list of yes / no / unknown.
+/// The answer source `spec` names: `oracle` (needs the simulated teacher's profile and seed),
+/// `all-yes`, `terminal`, or a comma-separated list of yes / no / unknown.
 pub fn answer_source(
     spec: &str,
-    simulated: Option<(&SimulatedDemo, &TeacherProfile, u64)>,
+    simulated: Option<(&TeacherProfile, u64)>,
 ) -> Result<Box<dyn AnswerSource>, CliError> {
     match spec {
         "oracle" => {
-            let (sim, profile, seed) = simulated.ok_or_else(|| {
+            let (profile, seed) = simulated.ok_or_else(|| {
                 CliError::input(
                     "--answers oracle needs the simulated teacher (--teacher sim): only it knows the task's true lines",
                 )
             })?;
-            Ok(Box::new(oracle_for(sim, profile, seed)))
+            Ok(Box::new(oracle(profile, seed)))
         }
         "all-yes" => Ok(Box::new(AllYes)),
         "terminal" => {

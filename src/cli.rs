@@ -99,6 +99,50 @@ pub enum Command {
     ///
     /// Exit codes: 0 every trial passed; 1 some trial failed; 2 bad input.
     Demo(DemoArgs),
+    /// The thesis's user study, simulated: AKL against KD and mACL on the built-in tasks.
+    ///
+    /// A fixed population of simulated participants (teacher profiles drawn from ranges set
+    /// from the thesis's reported behaviour: speed, tremor, curvature, straight free motion,
+    /// wrong and "I don't know" answers, keyframe-marking habits, how they take suggestions)
+    /// calibrates, then teaches each built-in task with each method in a Latin-square order of
+    /// methods (thesis §4.4). What a participant takes from AKL's suggestions carries into its
+    /// later demonstrations. Every learned spec is scored against the task's ground truth
+    /// (keyframe, pose and constraint accuracy, success; thesis §4.2).
+    ///
+    /// Prints the success rate per task and method (cf. Table 4.1, case (a)), AKL's constraint
+    /// errors and what the answers did (cf. Table 4.2), and the learning runtime per method
+    /// (cf. §4.6.8); with --execute, the mean pass rate of the specs in simulation. --out
+    /// writes trials.csv (a row per trial), trials.json (the population, participants,
+    /// calibrations, every trial with its spec, and the tables) and four SVG figures:
+    /// keyframes.svg, poses.svg, constraint_length.svg (missed + incorrect per trial, cf.
+    /// Figures 4-2b, 4-4b, 4-6a) and runtime.svg (log scale, cf. Figure 4-9). A progress bar
+    /// shows on standard error when it is a terminal. The same seed gives the same study
+    /// (runtimes aside).
+    ///
+    /// Exit codes: 0 the study ran; 2 bad input (no participants, --execute 0, an output
+    /// folder that is a file); 1 anything else.
+    Eval(EvalArgs),
+}
+
+/// `akl eval`
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// Number of simulated participants (the thesis had 12).
+    #[arg(long, default_value_t = 12)]
+    pub participants: usize,
+    /// Seed of the draw of participants and of everything they do.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Execute every learned spec N times in simulation with the objects moved around, and
+    /// report the pass rates (each run plans and simulates the whole task).
+    #[arg(long, value_name = "N")]
+    pub execute: Option<usize>,
+    /// Folder for trials.csv, trials.json and the SVG figures (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print the tables and every trial's scores as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `--robot DIR`, shared by the commands that use a robot.

@@ -2,7 +2,7 @@
 //! binary: files written, exit codes, live teaching from standard input with answers typed on a
 //! pseudo-terminal, and recordings that survive SIGKILL and end cleanly on Ctrl-C.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -165,36 +165,6 @@ fn bad_input_is_named_and_exits_2() {
     assert!(!dir.join("x.mcap").exists() && !dir.join("x.txt").exists());
 }
 
-/// A JSONL stream a robot driver would send: the frames and keyframe marks of a simulated
-/// teaching, without the learner's own detector states and dialogue.
-fn driver_stream(dir: &Path, task: &str) -> String {
-    let o = akl_in(
-        dir,
-        &[
-            "teach",
-            "--task",
-            task,
-            "--answers",
-            "all-yes",
-            "-o",
-            "src.jsonl",
-        ],
-    );
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    std::fs::read_to_string(dir.join("src.jsonl"))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
-        .map(|l| {
-            format!(
-                "{}\n",
-                l.replace(",\"constrained\":true", "")
-                    .replace(",\"constrained\":false", "")
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn a_driver_streams_frames_on_stdin() {
     let dir = scratch("stdin");
@@ -263,48 +233,16 @@ fn a_stream_recorded_without_the_detector_is_replayed_by_learn() {
     assert_eq!(json(&o)["success"], true);
 }
 
-fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
-    use std::os::fd::AsRawFd;
-    use std::os::unix::process::CommandExt;
-    let slave = pty.slave.as_raw_fd();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
-    cmd.args(args)
-        .current_dir(dir)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    // SAFETY: only async-signal-safe calls between fork and exec.
-    unsafe {
-        cmd.pre_exec(move || {
-            if libc::setsid() < 0 || libc::ioctl(slave, libc::TIOCSCTTY, 0) < 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-    cmd.spawn().unwrap()
-}
-
 #[test]
 fn questions_are_answered_on_the_terminal() {
     let dir = scratch("tty");
-    let stream = driver_stream(&dir, "inspection");
-    let mut pty = open_pty();
-    let mut child = spawn_on_tty(
-        &dir,
-        &["teach", "--teacher", "stdin", "-o", "tty.jsonl", "--json"],
-        &pty,
-    );
-    let mut stdin = child.stdin.take().unwrap();
-    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
     // Read the question off the terminal, then type the answer.
-    let mut seen = String::new();
-    let mut buf = [0u8; 4096];
-    while !seen.contains("answer [y/n/?]") {
-        let n = pty.master.read(&mut buf).unwrap();
-        assert!(n > 0, "the terminal closed before a question: {seen}");
-        seen.push_str(&text(&buf[..n]));
-    }
+    let Asked {
+        child,
+        mut pty,
+        feeder,
+        seen,
+    } = teach_until_asked(&dir, "tty.jsonl");
     assert!(
         seen.contains("Do I have to move in a straight line there?"),
         "{seen}"

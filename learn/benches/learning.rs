@@ -1,12 +1,16 @@
-//! Learning speed: the online detector per frame, OKL against demonstration length, and OKL
-//! against the mACL baseline on the same demonstrations (thesis §4.6.8).
+//! Learning speed: the online detector per frame, OKL against demonstration length, OKL
+//! against the mACL baseline on the same demonstrations (thesis §4.6.8), and the TV denoiser
+//! on OKL's fitting-error signals against its worst case.
 //!
 //! Run with `cargo bench -p akl-learn --bench learning`; results are in BENCHMARKS.md.
 
 use akl_learn::calibration::Calibration;
 use akl_learn::demo::Answer;
 use akl_learn::detector::Detector;
+use akl_learn::okl::line::{fit_line, fitting_errors};
+use akl_learn::okl::segment::runs;
 use akl_learn::okl::synth::DemoBuilder;
+use akl_learn::tvd;
 use akl_learn::{learn_spec, Demo, LearnOptions, Method};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::Duration;
@@ -96,5 +100,46 @@ fn okl_vs_macl(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, detector, okl_scaling, okl_vs_macl);
+/// The fitting-error signal OKL denoises: every frame's distance from the line fitted to the
+/// first detected run of a demo `frames` long.
+fn fitting_error_signal(frames: usize) -> Vec<f64> {
+    let d = demo(frames as f64 / 100.0);
+    let positions: Vec<_> = d.ee.iter().map(|p| p.translation.vector).collect();
+    let first = runs(&d.detector)[0].clone();
+    let line = fit_line(&positions[first]).expect("a detected line");
+    fitting_errors(&positions, 0..=positions.len() - 1, &line)
+}
+
+/// A signal on which the direct algorithm takes quadratic time: y_k = 1/(k+1) with λ = 0.5,
+/// found by timing candidate signals at doubling lengths (ramps, square roots, logarithms,
+/// alternations, spikes): the harmonic decay grows 4.5× per doubling. Every restart after a
+/// jump rescans nearly all of the rest of the signal.
+fn worst_case_signal(samples: usize) -> Vec<f64> {
+    (0..samples).map(|k| 1.0 / (k + 1) as f64).collect()
+}
+
+fn tvd_throughput(c: &mut Criterion) {
+    let mut group = c.benchmark_group("tvd");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(3));
+    let lambda = LearnOptions::default().okl.tvd_lambda;
+    for samples in [1_000usize, 10_000, 100_000] {
+        let y = fitting_error_signal(samples);
+        group.throughput(Throughput::Elements(y.len() as u64));
+        group.bench_with_input(BenchmarkId::new("fitting_error", samples), &y, |b, y| {
+            b.iter(|| tvd::denoise(y, lambda))
+        });
+    }
+    for samples in [1_000usize, 2_000, 4_000] {
+        let y = worst_case_signal(samples);
+        group.throughput(Throughput::Elements(samples as u64));
+        group.bench_with_input(BenchmarkId::new("worst_case", samples), &y, |b, y| {
+            b.iter(|| tvd::denoise(y, 0.5))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, detector, okl_scaling, okl_vs_macl, tvd_throughput);
 criterion_main!(benches);

@@ -5,6 +5,17 @@
 //! logistic regression turns d_i into the probability that the constraint state switches
 //! (eq. 3.3), and an energy tank decides when it does (eqs. 3.4–3.5). One [`Detector::push`]
 //! per recorded frame: constant time, no allocation.
+//!
+//! Two rules the thesis implies but does not spell out:
+//! - **A rejected line stays rejected.** After "no" ([`Detector::reject`]) the state reads
+//!   unconstrained at once, but the tank keeps following the rejected line as if it were still
+//!   constrained: only once the motion has left that line (the tank would have switched the
+//!   state back to unconstrained) can a new line switch it on and raise a new question. Without
+//!   this, a hand that keeps moving straight refills the empty tank and the same line is asked
+//!   about again a few centimetres later.
+//! - **A detection ends at a gripper command.** [`Detector::reset`] forgets the filtered points,
+//!   the tank and the state, so a line answered before a grasp or release never carries into
+//!   the next interaction segment: motion there is asked about afresh.
 
 use k::nalgebra::Vector3;
 
@@ -30,6 +41,9 @@ pub struct Detector {
     count: usize,
     tank: f64,
     constrained: bool,
+    /// The teacher rejected the line under way: the state reads unconstrained while the tank
+    /// waits for the motion to leave it.
+    rejected: bool,
     line_start: Vector3<f64>,
 }
 
@@ -42,6 +56,7 @@ impl Detector {
             count: 0,
             tank: 0.0,
             constrained: false,
+            rejected: false,
             line_start: Vector3::zeros(),
         }
     }
@@ -96,31 +111,49 @@ impl Detector {
     ///
     /// The tank is kept at or above zero: the thesis does not bound it, but an unbounded
     /// negative tank would let a long stretch of one state delay the next switch arbitrarily.
+    /// While a rejected line is under way the tank runs as in the constrained state, and
+    /// filling it ends the rejection instead of switching the (already unconstrained) state.
     fn step(&mut self, d: f64) -> bool {
         let p_unconstrained = self.calibration.probability_unconstrained(d);
-        let p_switch = if self.constrained {
+        let p_switch = if self.constrained || self.rejected {
             p_unconstrained
         } else {
             1.0 - p_unconstrained
         };
         self.tank = (self.tank + p_switch * p_switch - self.calibration.tank_dissipation).max(0.0);
-        if self.tank >= self.calibration.tank_threshold {
-            self.constrained = !self.constrained;
-            self.tank = 0.0;
-            if self.constrained {
-                self.line_start = self.filtered[0];
-            }
-            true
-        } else {
-            false
+        if self.tank < self.calibration.tank_threshold {
+            return false;
         }
+        self.tank = 0.0;
+        if self.rejected {
+            self.rejected = false;
+            return false;
+        }
+        self.constrained = !self.constrained;
+        if self.constrained {
+            self.line_start = self.filtered[0];
+        }
+        true
     }
 
     /// The teacher answered "no": the learner returns to the unconstrained state (thesis
-    /// §3.3.1.2) with an empty tank.
+    /// §3.3.1.2) with an empty tank, and does not switch on again before the motion has left
+    /// the rejected line (see the module docs).
     pub fn reject(&mut self) {
+        self.rejected = self.constrained;
         self.constrained = false;
         self.tank = 0.0;
+    }
+
+    /// Whether a rejected line is still under way.
+    pub fn rejecting(&self) -> bool {
+        self.rejected
+    }
+
+    /// A gripper command: forgets the filtered points, the tank, the state and any rejection,
+    /// so the next interaction segment is detected afresh.
+    pub fn reset(&mut self) {
+        *self = Detector::new(self.calibration);
     }
 }
 
@@ -206,6 +239,48 @@ mod tests {
         assert!(detector.constrained());
         detector.reject();
         assert!(!detector.constrained() && detector.tank() == 0.0);
+    }
+
+    #[test]
+    fn a_rejected_line_does_not_switch_on_again_until_left() {
+        let mut path = line(Vector3::new(0.12, 0.0, 0.3), -Vector3::x(), 600);
+        let end = *path.last().unwrap();
+        path.extend(
+            arc(0.12, 400)
+                .into_iter()
+                .map(|p| p + end - Vector3::x() * 0.12),
+        );
+        let end = *path.last().unwrap();
+        path.extend(line(end, Vector3::y(), 300));
+        let mut detector = Detector::new(Calibration::default());
+        let mut on = Vec::new();
+        for (i, p) in path.iter().enumerate() {
+            if detector.push(*p).is_some_and(|s| s.constrained) {
+                on.push(i);
+                detector.reject();
+            }
+        }
+        // Once on the 1.2 m line, not again on it, and once more on the new line.
+        assert_eq!(on.len(), 2, "{on:?}");
+        assert!(on[0] < 600 && on[1] > 1000, "{on:?}");
+    }
+
+    #[test]
+    fn a_reset_forgets_the_line() {
+        let mut detector = Detector::new(Calibration::default());
+        let path = line(Vector3::zeros(), Vector3::x(), 400);
+        for p in &path[..200] {
+            detector.push(*p);
+        }
+        assert!(detector.constrained());
+        detector.reset();
+        assert!(!detector.constrained() && detector.tank() == 0.0);
+        // The line goes on: it must be detected again from scratch, 2·D_F plus two points on.
+        let switched = path[200..]
+            .iter()
+            .position(|p| detector.push(*p).is_some())
+            .unwrap();
+        assert!((path[200 + switched] - path[200]).norm() >= 0.15 - 1e-9);
     }
 
     proptest! {

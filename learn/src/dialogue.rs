@@ -98,6 +98,17 @@ pub enum DialogueError {
 pub trait AnswerSource {
     /// The answer to `question`.
     fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError>;
+
+    /// Shows the learner's suggestion ([`SUGGESTION`]) after a "no" or "I don't know". A person
+    /// sees it; sources that only answer ignore it.
+    fn suggest(&mut self, _suggestion: &str) -> Result<(), DialogueError> {
+        Ok(())
+    }
+
+    /// Tells a source that knows the teacher's mind (the simulated teacher's [`Oracle`]) what
+    /// the teacher intended in the frames recorded since the last call: per frame, whether a
+    /// required line was under way. Other sources ignore it.
+    fn intend(&mut self, _required: &[bool]) {}
 }
 
 /// Parses one answer word: `yes`/`y`, `no`/`n`, `unknown`/`u`/`?`/`dont-know`.
@@ -173,9 +184,10 @@ pub struct Oracle {
 }
 
 impl Oracle {
-    /// An oracle over per-frame flags "a required line is under way", answering yes when one
-    /// was under way within the last `window` frames; wrong with `wrong_rate`, "I don't know"
-    /// with `unknown_rate`.
+    /// An oracle over per-frame flags "a required line is under way" (more can follow through
+    /// [`AnswerSource::intend`] as a teacher records them), answering yes when one was under
+    /// way within the last `window` frames; wrong with `wrong_rate`, "I don't know" with
+    /// `unknown_rate`.
     pub fn new(
         required: Vec<bool>,
         window: usize,
@@ -210,6 +222,10 @@ impl AnswerSource for Oracle {
         } else {
             Answer::No
         })
+    }
+
+    fn intend(&mut self, required: &[bool]) {
+        self.required.extend_from_slice(required);
     }
 }
 
@@ -269,6 +285,12 @@ impl<R: Read, W: Write> AnswerSource for Terminal<R, W> {
             self.prompt().map_err(io)?;
         }
     }
+
+    fn suggest(&mut self, suggestion: &str) -> Result<(), DialogueError> {
+        let io = |e: std::io::Error| DialogueError::Terminal(e.to_string());
+        writeln!(self.output, "{suggestion}").map_err(io)?;
+        self.output.flush().map_err(io)
+    }
 }
 
 #[cfg(test)]
@@ -323,5 +345,20 @@ mod tests {
         );
         assert!(shown.contains("(+0.00, -1.00, +0.00)"), "{shown}");
         assert_eq!(shown.matches("answer [y/n/?]").count(), 2, "{shown}");
+        assert!(!shown.contains(SUGGESTION));
+        let mut out = Vec::new();
+        Terminal::new(&b""[..], &mut out)
+            .suggest(SUGGESTION)
+            .unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), format!("{SUGGESTION}\n"));
+    }
+
+    #[test]
+    fn an_oracle_learns_the_intent_as_it_is_recorded() {
+        let mut oracle = Oracle::new(Vec::new(), 0, 0.0, 0.0, ChaCha8Rng::seed_from_u64(1));
+        oracle.intend(&[false, false]);
+        oracle.intend(&[true]);
+        assert_eq!(oracle.answer(&question(2)), Ok(Answer::Yes));
+        assert_eq!(oracle.answer(&question(1)), Ok(Answer::No));
     }
 }

@@ -68,6 +68,10 @@ pub struct Scores {
     pub common_line_length: f64,
     /// Constraint accuracy (IoU of line lengths); `None` when neither spec has a line.
     pub constraint_accuracy: Option<f64>,
+    /// True lines no learned line overlaps (missed constraints, Figure 4-6b).
+    pub missed_lines: usize,
+    /// Learned lines that overlap no true line (incorrect constraints, Figure 4-6b).
+    pub incorrect_lines: usize,
     /// Whether the learned spec equals the ground truth.
     pub success: bool,
     /// Why it is not a success, one entry per difference.
@@ -105,8 +109,21 @@ pub fn score(learned: &TaskSpec, truth: &TaskSpec, tol: &Tolerance) -> Scores {
             0.0
         })
     };
+    let overlaps = |a: &(Vector3<f64>, Vector3<f64>), b: &(Vector3<f64>, Vector3<f64>)| {
+        common_length(a, b, tol) > 0.0
+    };
+    let missed_lines = tl
+        .iter()
+        .filter(|tr| !ll.iter().any(|lr| overlaps(lr, tr)))
+        .count();
+    let incorrect_lines = ll
+        .iter()
+        .filter(|lr| !tl.iter().any(|tr| overlaps(lr, tr)))
+        .count();
     let differences = differences(l, t, tol);
     Scores {
+        missed_lines,
+        incorrect_lines,
         learned: l.len(),
         truth: t.len(),
         matched_keyframes,
@@ -329,12 +346,18 @@ mod tests {
         assert!((s.true_line_length - 0.36).abs() < 1e-9);
         assert!((s.learned_line_length - 0.18).abs() < 1e-9);
         assert!((s.constraint_accuracy.unwrap() - 0.5).abs() < 1e-9);
+        assert_eq!((s.missed_lines, s.incorrect_lines), (0, 0));
         // No learned line at all.
         let mut none = inspection.clone();
         none.keyframes[2].constraint = Constraint::None;
-        assert_eq!(
-            score(&none, &inspection, &Tolerance::default()).constraint_accuracy,
-            Some(0.0)
-        );
+        let s = score(&none, &inspection, &Tolerance::default());
+        assert_eq!(s.constraint_accuracy, Some(0.0));
+        assert_eq!((s.missed_lines, s.incorrect_lines), (1, 0));
+        // A line where there is none (the carry to the part) and none where there is one.
+        let mut wrong = inspection.clone();
+        wrong.keyframes[1].constraint = Constraint::MoveInLine;
+        wrong.keyframes[2].constraint = Constraint::None;
+        let s = score(&wrong, &inspection, &Tolerance::default());
+        assert_eq!((s.missed_lines, s.incorrect_lines), (1, 1));
     }
 }

@@ -7,7 +7,7 @@ use k::nalgebra::Vector3;
 use crate::calibration::Calibration;
 use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind};
 use crate::detector::Detector;
-use crate::dialogue::{AnswerSource, DialogueError, Question};
+use crate::dialogue::{AnswerSource, DialogueError, Question, SUGGESTION};
 use crate::validate::FrameChecker;
 
 /// How many nearby objects a question mentions.
@@ -61,6 +61,7 @@ pub struct TeachingSession<'a> {
     answers: &'a mut dyn AnswerSource,
     sink: Option<&'a mut dyn RecordingSink>,
     queries: usize,
+    suggestions: usize,
 }
 
 impl<'a> TeachingSession<'a> {
@@ -78,6 +79,7 @@ impl<'a> TeachingSession<'a> {
             answers,
             sink: None,
             queries: 0,
+            suggestions: 0,
         }
     }
 
@@ -92,8 +94,22 @@ impl<'a> TeachingSession<'a> {
         self.queries
     }
 
+    /// Number of suggestions made so far.
+    pub fn suggestions(&self) -> usize {
+        self.suggestions
+    }
+
+    /// Who answers: to tell a simulated teacher's oracle what the teacher intends as frames
+    /// are recorded ([`AnswerSource::intend`]).
+    pub fn answers(&mut self) -> &mut dyn AnswerSource {
+        &mut *self.answers
+    }
+
     /// Takes one frame; on a 0→1 switch asks the question, records the answer and, after "no"
-    /// or "I don't know", the suggestion; "no" returns the detector to unconstrained.
+    /// or "I don't know", shows and records the suggestion; "no" returns the detector to
+    /// unconstrained. A gripper command resets the detector once the frame's state is recorded
+    /// (the state at the command frame is the one detected up to it), so no detection carries
+    /// into the next interaction segment.
     pub fn push(
         &mut self,
         t: f64,
@@ -122,7 +138,12 @@ impl<'a> TeachingSession<'a> {
             track.poses.push(*pose);
         }
         let position = ee.translation.vector;
-        let switch = self.detector.push(position);
+        let command = index > 0 && self.demo.gripper[index - 1] != gripper;
+        let switch = if command {
+            None
+        } else {
+            self.detector.push(position)
+        };
         let mut events = Vec::new();
         if let Some(switch) = switch.filter(|s| s.constrained) {
             self.queries += 1;
@@ -137,13 +158,19 @@ impl<'a> TeachingSession<'a> {
             events.push(DialogueKind::Query);
             events.push(DialogueKind::Answer(answer));
             if answer != Answer::Yes {
+                self.answers.suggest(SUGGESTION)?;
                 events.push(DialogueKind::Suggestion);
+                self.suggestions += 1;
             }
             if answer == Answer::No {
                 self.detector.reject();
             }
         }
         self.demo.detector.push(self.detector.constrained());
+        if command {
+            self.detector.reset();
+            self.detector.push(position);
+        }
         if let Some(sink) = self.sink.as_deref_mut() {
             sink.frame(&self.demo, index)?;
         }

@@ -1,9 +1,13 @@
 //! Teaching with the simulated teacher: its recording streamed through a [`TeachingSession`]
-//! frame by frame, exactly as a live teacher's would be.
+//! frame by frame, exactly as a live teacher's would be — either a finished recording replayed
+//! ([`run_session`], [`stream_demo`]), or the teacher demonstrating step by step while the
+//! learner talks to it ([`teach_simulated`]), so that it can heed the learner's suggestions.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use akl_scene::{Task, World};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -11,17 +15,19 @@ use crate::calibration::Calibration;
 use crate::demo::{Demo, DemoHeader};
 use crate::dialogue::{AnswerSource, Oracle};
 use crate::session::{RecordingSink, SessionError, TeachingSession};
-use crate::teacher::{SimulatedDemo, TeacherProfile};
+use crate::teacher::{SimulatedDemo, SimulatedTeacher, TeacherProfile};
 
 /// How long after a required line ends the oracle still answers "yes" (s): the detector
 /// switches up to a few filter steps late, and a person remembers the line they just made.
 pub const ORACLE_MEMORY: f64 = 1.0;
 
-/// The oracle for a simulated demonstration: knows the required lines, errs as the profile says.
-pub fn oracle_for(sim: &SimulatedDemo, profile: &TeacherProfile, seed: u64) -> Oracle {
+/// The oracle of a simulated teacher with `profile` that has recorded nothing yet: it learns
+/// what the teacher intends as frames are recorded ([`AnswerSource::intend`]) and errs as the
+/// profile says.
+pub fn oracle(profile: &TeacherProfile, seed: u64) -> Oracle {
     let window = (ORACLE_MEMORY * profile.rate).round() as usize;
     Oracle::new(
-        sim.intended_line.clone(),
+        Vec::new(),
         window,
         profile.wrong_answer_rate,
         profile.unknown_answer_rate,
@@ -29,8 +35,18 @@ pub fn oracle_for(sim: &SimulatedDemo, profile: &TeacherProfile, seed: u64) -> O
     )
 }
 
-/// Streams a simulated recording through a teaching session: the detector runs online, the
-/// dialogue asks `answers`, and the teacher's keyframe marks are recorded.
+/// The oracle for a finished simulated demonstration: knows the required lines, errs as the
+/// profile says.
+pub fn oracle_for(sim: &SimulatedDemo, profile: &TeacherProfile, seed: u64) -> Oracle {
+    let mut oracle = oracle(profile, seed);
+    oracle.intend(&sim.intended_line);
+    oracle
+}
+
+/// Streams a finished simulated recording through a teaching session: the detector runs
+/// online, the dialogue asks `answers`, and the teacher's keyframe marks are recorded. The
+/// teacher cannot react to suggestions here (its motion is already made); see
+/// [`teach_simulated`] for that.
 pub fn run_session(
     sim: &SimulatedDemo,
     calibration: Calibration,
@@ -72,6 +88,55 @@ pub struct Pace<'a> {
     pub stop: Option<&'a AtomicBool>,
 }
 
+/// Plays frames of a recording into a session at a [`Pace`], with the teacher's keyframe
+/// marks after the frames they follow.
+struct Player<'p> {
+    pace: &'p Pace<'p>,
+    started: Instant,
+    next_mark: usize,
+}
+
+impl<'p> Player<'p> {
+    fn new(pace: &'p Pace<'p>) -> Self {
+        Player {
+            pace,
+            started: Instant::now(),
+            next_mark: 0,
+        }
+    }
+
+    /// Plays `frames` of `demo`, marking a keyframe after each frame listed in `marks`
+    /// (ascending, for the whole recording); true when the pace's stop flag ended it early.
+    fn play(
+        &mut self,
+        session: &mut TeachingSession,
+        demo: &Demo,
+        frames: Range<usize>,
+        marks: &[usize],
+    ) -> Result<bool, SessionError> {
+        let mut poses = Vec::with_capacity(demo.objects.len());
+        for i in frames {
+            if self.pace.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+                return Ok(true);
+            }
+            if self.pace.realtime {
+                let due = Duration::from_secs_f64((demo.times[i] - demo.times[0]).max(0.0));
+                if let Some(wait) = due.checked_sub(self.started.elapsed()) {
+                    std::thread::sleep(wait);
+                }
+            }
+            poses.clear();
+            poses.extend(demo.objects.iter().map(|o| o.poses[i]));
+            session.push(demo.times[i], demo.ee[i], demo.gripper[i], &poses)?;
+            while marks.get(self.next_mark).is_some_and(|m| *m <= i) {
+                session.mark_keyframe()?;
+                self.next_mark += 1;
+            }
+        }
+        Ok(false)
+    }
+}
+
 /// Streams the frames of a recorded `demo` through a fresh teaching session recording under
 /// `header`, marking a keyframe after each frame listed in `marks` (ascending): the online
 /// detector and the dialogue run exactly as they would have live. Returns the session's
@@ -91,29 +156,94 @@ pub fn stream_demo(
     if let Some(sink) = sink {
         session = session.with_sink(sink);
     }
-    let mut marks = marks.iter().peekable();
-    let mut poses = Vec::with_capacity(names.len());
-    let started = Instant::now();
-    let mut stopped = false;
-    for i in 0..demo.len() {
-        if pace.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
-            stopped = true;
-            break;
-        }
-        if pace.realtime {
-            let due = Duration::from_secs_f64((demo.times[i] - demo.times[0]).max(0.0));
-            if let Some(wait) = due.checked_sub(started.elapsed()) {
-                std::thread::sleep(wait);
-            }
-        }
-        poses.clear();
-        poses.extend(demo.objects.iter().map(|o| o.poses[i]));
-        session.push(demo.times[i], demo.ee[i], demo.gripper[i], &poses)?;
-        while marks.next_if(|m| **m <= i).is_some() {
-            session.mark_keyframe()?;
-        }
-    }
+    let stopped = Player::new(pace).play(&mut session, demo, 0..demo.len(), marks)?;
     Ok((session.finish()?, stopped))
+}
+
+/// Why a simulated teacher could not teach.
+#[derive(Debug, thiserror::Error)]
+pub enum SimulatedTeachingError {
+    /// The task's teaching steps do not fit the world (the message names the step).
+    #[error("{0}")]
+    Teacher(String),
+    /// The session failed (no answer to a query, the recording could not be written).
+    #[error(transparent)]
+    Session(#[from] SessionError),
+}
+
+/// What a simulated teacher taught in a live session.
+#[derive(Debug, Clone)]
+pub struct SimulatedTeaching {
+    /// The teacher's recording with what only the simulation knows (intended and unintended
+    /// lines, marks).
+    pub sim: SimulatedDemo,
+    /// The session's recording: the frames with the detector states and the dialogue.
+    pub demo: Demo,
+    /// Whether the pace's stop flag ended it early.
+    pub stopped: bool,
+    /// Suggestions the learner made.
+    pub suggestions: usize,
+    /// The teacher's chance of an unintended line at the end, lowered by the suggestions it
+    /// heeded (what it carries into its next demonstration).
+    pub unintended_line_chance: f64,
+}
+
+/// The simulated teacher with `profile` demonstrates `task` in `world` step by step while a
+/// teaching session listens: each step's frames go through the online detector and dialogue
+/// (`answers` answers; an oracle among them is told the teacher's intent as it is recorded)
+/// before the next step is made, and after each suggestion the teacher heeds it as its profile
+/// says ([`SimulatedTeacher::heed_suggestion`]). The recording is named after the calibration
+/// `label`.
+#[allow(clippy::too_many_arguments)]
+pub fn teach_simulated(
+    task: &Task,
+    world: &World,
+    profile: &TeacherProfile,
+    seed: u64,
+    calibration: (Calibration, Option<&str>),
+    answers: &mut dyn AnswerSource,
+    sink: Option<&mut dyn RecordingSink>,
+    pace: &Pace,
+) -> Result<SimulatedTeaching, SimulatedTeachingError> {
+    let mut teacher = SimulatedTeacher::new(task, world, profile, seed)
+        .map_err(SimulatedTeachingError::Teacher)?;
+    let recorded = &teacher.recorded().demo;
+    let header = session_header(&recorded.header, calibration.1);
+    let names: Vec<String> = recorded.objects.iter().map(|o| o.name.clone()).collect();
+    let mut session = TeachingSession::new(header, &names, calibration.0, answers);
+    if let Some(sink) = sink {
+        session = session.with_sink(sink);
+    }
+    let mut player = Player::new(pace);
+    let (mut played, mut heard) = (0, 0);
+    let stopped = loop {
+        let sim = teacher.recorded();
+        let frames = played..sim.demo.len();
+        session.answers().intend(&sim.intended_line[frames.clone()]);
+        if player.play(&mut session, &sim.demo, frames, &sim.marked_keyframes)? {
+            break true;
+        }
+        played = sim.demo.len();
+        while heard < session.suggestions() {
+            teacher.heed_suggestion();
+            heard += 1;
+        }
+        if !teacher
+            .next_step()
+            .map_err(SimulatedTeachingError::Teacher)?
+        {
+            break false;
+        }
+    };
+    let suggestions = session.suggestions();
+    let unintended_line_chance = teacher.unintended_line_chance();
+    Ok(SimulatedTeaching {
+        unintended_line_chance,
+        sim: teacher.finish(),
+        demo: session.finish()?,
+        stopped,
+        suggestions,
+    })
 }
 
 #[cfg(test)]
@@ -122,7 +252,7 @@ mod tests {
     use crate::demo::{Answer, DialogueKind};
     use crate::dialogue::AllYes;
     use crate::teacher::demonstrate;
-    use akl_scene::builtin;
+    use akl_scene::{builtin, Task};
 
     fn answers(demo: &Demo) -> Vec<Answer> {
         demo.events
@@ -175,5 +305,68 @@ mod tests {
             kept.detector.iter().filter(|c| **c).count()
                 > demo.detector.iter().filter(|c| **c).count()
         );
+    }
+
+    fn live(task: &Task, profile: &TeacherProfile, seed: u64) -> SimulatedTeaching {
+        let mut oracle = oracle(profile, seed);
+        teach_simulated(
+            task,
+            &task.world,
+            profile,
+            seed,
+            (Calibration::default(), None),
+            &mut oracle,
+            None,
+            &Pace::default(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn without_suggestions_a_live_teacher_records_what_a_replay_does() {
+        let task = builtin::resolve("inspection").unwrap();
+        let profile = TeacherProfile::careful();
+        let taught = live(&task, &profile, 4);
+        let sim = demonstrate(&task, &task.world, &profile, 4).unwrap();
+        let mut oracle = oracle_for(&sim, &profile, 4);
+        let replayed = run_session(&sim, Calibration::default(), &mut oracle, None).unwrap();
+        assert_eq!(taught.suggestions, 0);
+        assert_eq!(taught.demo, replayed);
+        assert_eq!(taught.sim.intended_line, sim.intended_line);
+    }
+
+    /// Unintended straight runs that start after the first suggestion, over 10 seeds.
+    fn straight_after_suggestion(uptake: f64) -> usize {
+        let task = builtin::resolve("pick_place").unwrap();
+        let profile = TeacherProfile {
+            unintended_line_chance: 0.9,
+            suggestion_uptake: uptake,
+            ..TeacherProfile::careful()
+        };
+        (0..10)
+            .map(|seed| {
+                let taught = live(&task, &profile, seed);
+                let Some(first) = taught
+                    .demo
+                    .events
+                    .iter()
+                    .find(|e| e.kind == DialogueKind::Suggestion)
+                else {
+                    return 0;
+                };
+                crate::okl::segment::runs(&taught.sim.unintended_line)
+                    .iter()
+                    .filter(|r| *r.start() > first.frame)
+                    .count()
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_teacher_who_heeds_suggestions_moves_straight_less_afterwards() {
+        assert_eq!(straight_after_suggestion(1.0), 0);
+        let stubborn = straight_after_suggestion(0.0);
+        let halfway = straight_after_suggestion(0.5);
+        assert!(stubborn >= 10 && halfway < stubborn, "{halfway} {stubborn}");
     }
 }

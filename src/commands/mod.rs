@@ -2,6 +2,7 @@
 
 mod calibrate;
 mod demo;
+mod eval;
 mod execute;
 mod flexibility;
 mod learn;
@@ -32,6 +33,7 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Execute(args) => execute::run(args),
         Command::Flexibility(args) => flexibility::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Eval(args) => eval::run(args),
     }
 }
 

@@ -6,13 +6,13 @@ use crate::cli::{TeachArgs, Teacher};
 use crate::exit::{CliError, CliResult};
 use crate::stop::on_ctrl_c;
 use akl_learn::calibration::Calibration;
+use akl_learn::demo::DemoHeader;
 use akl_learn::demo::{Answer, DialogueKind};
 use akl_learn::live::{LiveEnd, LiveStream};
 use akl_learn::okl::{LearnError, OklParams};
 use akl_learn::recording::Recording;
 use akl_learn::session::TeachingSession;
-use akl_learn::teach::{session_header, stream_demo, Pace};
-use akl_learn::teacher::demonstrate;
+use akl_learn::teach::{self as learn_teach, session_header, Pace, SimulatedTeachingError};
 use akl_learn::{learn_spec, Demo, LearnOptions, Method};
 use akl_scene::{builtin, Task};
 use akl_tsr::TaskSpec;
@@ -142,8 +142,9 @@ pub(crate) struct SimulatedTeaching<'a> {
 type Taught = (Demo, PathBuf, bool, Option<Task>);
 
 /// Records the simulated teacher's demonstration through a teaching session (the online
-/// detector asks, `t.answers` answers) under the calibration named `label`. Returns the
-/// demo, the recording's path, and whether `stop` (set by Ctrl-C) ended it early.
+/// detector asks, `t.answers` answers, the teacher heeds the suggestions) under the calibration
+/// named `label`. Returns the demo, the recording's path, and whether `stop` (set by Ctrl-C)
+/// ended it early.
 pub(crate) fn teach_simulated(
     t: &SimulatedTeaching,
     calibration: Calibration,
@@ -154,29 +155,44 @@ pub(crate) fn teach_simulated(
     if let Some(rate) = t.rate {
         profile.rate = rate;
     }
-    let sim = demonstrate(t.task, &t.task.world, &profile, t.seed)
-        .map_err(|e| CliError::input(format!("task `{}`: {e}", t.task.name)))?;
-    let mut answers = answer_source(t.answers, Some((&sim, &profile, t.seed)))?;
-    let header = session_header(&sim.demo.header, Some(label));
-    let names: Vec<String> = sim.demo.objects.iter().map(|o| o.name.clone()).collect();
+    profile
+        .validate()
+        .map_err(|e| CliError::input(format!("--profile {}: {e}", t.profile)))?;
+    let mut answers = answer_source(t.answers, Some((&profile, t.seed)))?;
+    let header = session_header(&DemoHeader::new(t.task.name.clone()), Some(label));
+    let names: Vec<String> = t
+        .task
+        .world
+        .objects
+        .iter()
+        .map(|o| o.name.clone())
+        .collect();
     let mut recording = Recording::create(t.output, &header, &names).map_err(CliError::input)?;
     let partial = recording.partial_path().to_path_buf();
     let pace = Pace {
         realtime: t.realtime,
         stop,
     };
-    let (demo, stopped) = stream_demo(
-        &sim.demo,
-        header,
-        &sim.marked_keyframes,
-        calibration,
+    let taught = learn_teach::teach_simulated(
+        t.task,
+        &t.task.world,
+        &profile,
+        t.seed,
+        (calibration, Some(label)),
         answers.as_mut(),
         Some(&mut recording),
         &pace,
     )
-    .map_err(|e| kept_partial(&partial, e))?;
+    .map_err(|e| match e {
+        SimulatedTeachingError::Teacher(e) => {
+            // Nothing worth keeping was recorded: the task cannot be demonstrated.
+            let _ = std::fs::remove_file(&partial);
+            CliError::input(format!("task `{}`: {e}", t.task.name))
+        }
+        other => kept_partial(&partial, other),
+    })?;
     let path = recording.finish().map_err(CliError::internal)?;
-    Ok((demo, path, stopped))
+    Ok((taught.demo, path, taught.stopped))
 }
 
 fn teach_live(

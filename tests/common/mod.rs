@@ -6,7 +6,7 @@
 
 use std::os::fd::{FromRawFd, OwnedFd};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 
 /// Runs `akl args` in `dir` and waits for it.
 pub fn akl_in(dir: &Path, args: &[&str]) -> Output {
@@ -79,5 +79,100 @@ pub fn open_pty() -> Pty {
             master: std::fs::File::from_raw_fd(master),
             slave: OwnedFd::from_raw_fd(slave),
         }
+    }
+}
+
+/// A JSONL stream a robot driver would send: the frames and keyframe marks of a simulated
+/// teaching, without the learner's own detector states and dialogue.
+pub fn driver_stream(dir: &Path, task: &str) -> String {
+    let o = akl_in(
+        dir,
+        &[
+            "teach",
+            "--task",
+            task,
+            "--answers",
+            "all-yes",
+            "-o",
+            "src.jsonl",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    std::fs::read_to_string(dir.join("src.jsonl"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
+        .map(|l| {
+            format!(
+                "{}\n",
+                l.replace(",\"constrained\":true", "")
+                    .replace(",\"constrained\":false", "")
+            )
+        })
+        .collect()
+}
+
+/// Starts `akl args` in `dir` with `pty` as its controlling terminal (so it can ask on
+/// /dev/tty) and piped standard streams.
+pub fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::process::CommandExt;
+    let slave = pty.slave.as_raw_fd();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_akl"));
+    cmd.args(args)
+        .current_dir(dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::setsid() < 0 || libc::ioctl(slave, libc::TIOCSCTTY, 0) < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    cmd.spawn().unwrap()
+}
+
+/// A live teaching session (`akl teach --teacher stdin --json`) fed the inspection task's
+/// driver stream, with its questions on a pseudo-terminal, stopped at its first question.
+pub struct Asked {
+    /// The running `akl`.
+    pub child: Child,
+    /// The terminal it asks on.
+    pub pty: Pty,
+    /// The thread writing the stream to its standard input.
+    pub feeder: std::thread::JoinHandle<std::io::Result<()>>,
+    /// What the terminal showed up to the first answer prompt.
+    pub seen: String,
+}
+
+/// Starts a live teaching session in `dir` recording to `output` and reads the terminal up to
+/// the first answer prompt.
+pub fn teach_until_asked(dir: &Path, output: &str) -> Asked {
+    use std::io::{Read, Write};
+    let stream = driver_stream(dir, "inspection");
+    let mut pty = open_pty();
+    let mut child = spawn_on_tty(
+        dir,
+        &["teach", "--teacher", "stdin", "-o", output, "--json"],
+        &pty,
+    );
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || stdin.write_all(stream.as_bytes()));
+    let mut seen = String::new();
+    let mut buf = [0u8; 4096];
+    while !seen.contains("answer [y/n/?]") {
+        let n = pty.master.read(&mut buf).unwrap();
+        assert!(n > 0, "the terminal closed before a question: {seen}");
+        seen.push_str(&text(&buf[..n]));
+    }
+    Asked {
+        child,
+        pty,
+        feeder,
+        seen,
     }
 }

@@ -14,6 +14,8 @@ pub struct ConstraintParams {
     pub filter_distance: f64,
     /// How far a detected region overshoots its line (metres): cut off its end.
     pub overshoot: f64,
+    /// How far the line runs before the detected region at least (metres): fit from there.
+    pub lead: f64,
     /// λ of the total variation denoising of the fitting error (metres × frames).
     pub tvd_lambda: f64,
     /// ε added to the largest smoothed error on the true line to get σ (metres).
@@ -51,11 +53,13 @@ pub fn constraint_boundaries(
 /// constrained motion starts and ends, or `None` when the region holds no line to fit or the
 /// line found is a single frame.
 ///
-/// A region holds no line when its true-line part spans less than half the filter distance.
-/// That is what is left of a detection that started in the previous segment: the detector
-/// keeps its state for its overshoot past a line that ends at a gripper command, so the
-/// clipped tail in the next segment is about that long and its true-line part is a point (a
-/// real detection needs at least `2·D_F` of line before it switches on).
+/// A region that starts at its segment's first frame holds no line when its true-line part
+/// spans less than half the filter distance: that is the tail of a detection that started in
+/// the previous segment (a recording made by a detector that was not reset at gripper
+/// commands keeps its state for its overshoot past a line ending at one, so the clipped tail
+/// in the next segment is about that long and its true-line part is a point; a real detection
+/// needs at least `2·D_F` of line before it switches on). Any other region is a real
+/// detection, however late: its fit starts [`ConstraintParams::lead`] before it.
 pub fn learn_constraint(
     positions: &[Vector3<f64>],
     segment: &Segment,
@@ -70,9 +74,11 @@ pub fn learn_constraint(
         params.overshoot
     };
     let l = true_line(positions, region, overshoot)?;
-    if (positions[*l.end()] - positions[*l.start()]).norm() < 0.5 * params.filter_distance {
+    let span = (positions[*l.end()] - positions[*l.start()]).norm();
+    if *region.start() == segment.start && span < 0.5 * params.filter_distance {
         return None;
     }
+    let l = lead_in(positions, segment.start, &l, params.lead);
     let line = fit_line(&positions[l.clone()])?;
     let errors = fitting_errors(positions, segment.frames(), &line);
     let smoothed = tvd::denoise(&errors, params.tvd_lambda);
@@ -81,6 +87,22 @@ pub fn learn_constraint(
     let (a, b) = constraint_boundaries(&smoothed, &local, sigma);
     let (a, b) = (segment.start + a, segment.start + b);
     ((positions[b] - positions[a]).norm() > 0.0 && b > a).then_some((a, b))
+}
+
+/// `line` started earlier, at the first frame (not before `first`) within `lead` metres of its
+/// start, walking back.
+fn lead_in(
+    positions: &[Vector3<f64>],
+    first: usize,
+    line: &RangeInclusive<usize>,
+    lead: f64,
+) -> RangeInclusive<usize> {
+    let origin = positions[*line.start()];
+    let mut a = *line.start();
+    while a > first && (positions[a - 1] - origin).norm() <= lead {
+        a -= 1;
+    }
+    a..=*line.end()
 }
 
 #[cfg(test)]
@@ -133,6 +155,7 @@ mod tests {
         let params = ConstraintParams {
             filter_distance: 0.05,
             overshoot: 0.05,
+            lead: 0.1,
             tvd_lambda: 0.002,
             epsilon: 0.001,
         };

@@ -64,11 +64,19 @@ pub fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
 /// it costs O(K log K) for K keyframes, not O(K²).
 ///
 /// A line boundary coincides with an interaction when it lies in the segment that interaction
-/// opens (line start) or closes (line end) and the end-effector positions at the two frames
-/// are at most `tolerance` metres apart; the boundary then moves to the interaction's frame and
-/// the two become one combined keyframe (the interaction's gripper command, the line's
-/// constraint flag). Lines in one segment that overlap are cut so the later one starts where
-/// the earlier one ends (one keyframe between them).
+/// opens (line start) or closes (line end) and the hand gets from the one to the other without
+/// leaving the line: the end-effector positions at the two frames are at most `tolerance`
+/// metres apart, or every frame between them lies within `tolerance` of the line (the hand
+/// went straight from the grasp into the line, or straight on from the line to the release).
+/// The second case matters for a teacher who starts a slide slowly after a grasp: the
+/// threshold places the boundary where the motion becomes clearly straight, a centimetre or
+/// two into the slide, although the line starts at the grasp. The boundary then moves to the
+/// interaction's frame and the two become one combined keyframe (the interaction's gripper
+/// command, the line's constraint flag). Lines in one segment that overlap are cut so the
+/// later one starts where the earlier one ends (one keyframe between them).
+///
+/// The check walks the frames between a boundary and its interaction once, so the merge stays
+/// linear in the number of frames.
 pub fn combine(
     interactions: &[RawKeyframe],
     lines: &[LineConstraint],
@@ -76,14 +84,17 @@ pub fn combine(
     tolerance: f64,
 ) -> Vec<RawKeyframe> {
     let is_interaction = |k: usize| interactions.binary_search_by_key(&k, |i| i.frame).is_ok();
-    let near = |a: usize, b: usize| (positions[a] - positions[b]).norm() <= tolerance;
+    let joins = |l: &LineConstraint, a: usize, b: usize| {
+        (positions[a] - positions[b]).norm() <= tolerance
+            || stays_on_line(positions, l, a.min(b)..=a.max(b), tolerance)
+    };
     let mut snapped: Vec<LineConstraint> = Vec::with_capacity(lines.len());
     for line in lines {
         let mut l = *line;
-        if is_interaction(l.segment.start) && near(l.start, l.segment.start) {
+        if is_interaction(l.segment.start) && joins(line, l.start, l.segment.start) {
             l.start = l.segment.start;
         }
-        if is_interaction(l.segment.end) && near(l.end, l.segment.end) {
+        if is_interaction(l.segment.end) && joins(line, l.end, l.segment.end) {
             l.end = l.segment.end;
         }
         if let Some(prev) = snapped.last() {
@@ -121,6 +132,24 @@ pub fn combine(
     out
 }
 
+/// Whether every position of `frames` lies within `tolerance` of the straight line through the
+/// two boundaries of `line`.
+fn stays_on_line(
+    positions: &[Vector3<f64>],
+    line: &LineConstraint,
+    frames: std::ops::RangeInclusive<usize>,
+    tolerance: f64,
+) -> bool {
+    let origin = positions[line.start];
+    let Some(direction) = (positions[line.end] - origin).try_normalize(1e-9) else {
+        return false;
+    };
+    positions[frames].iter().all(|p| {
+        let v = p - origin;
+        (v - direction * v.dot(&direction)).norm() <= tolerance
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,6 +159,15 @@ mod tests {
         (0..n)
             .map(|i| Vector3::new(i as f64 * 0.001, 0.0, 0.0))
             .collect()
+    }
+
+    /// [`positions`] lifted 1 mm off the x axis outside frames `on`: straight only there.
+    fn bent(n: usize, on: std::ops::RangeInclusive<usize>) -> Vec<Vector3<f64>> {
+        let mut p = positions(n);
+        for (k, v) in p.iter_mut().enumerate() {
+            v.y = if on.contains(&k) { 0.0 } else { 0.001 };
+        }
+        p
     }
 
     #[test]
@@ -155,7 +193,7 @@ mod tests {
             start: 5,
             end: 7,
         };
-        let out = combine(&inter, &[line], &positions(11), 0.001);
+        let out = combine(&inter, &[line], &bent(11, 5..=7), 0.0005);
         let kinds: Vec<_> = out
             .iter()
             .map(|k| (k.frame, k.kind, k.constraint))
@@ -199,8 +237,9 @@ mod tests {
                 (10, KeyframeKind::Combined, O, Constraint::MoveInLine),
             ]
         );
-        // With a tighter tolerance they stay apart.
-        assert_eq!(combine(&inter, &[line], &positions(11), 0.0005).len(), 4);
+        // With a tighter tolerance they stay apart, unless the hand went along the line.
+        assert_eq!(combine(&inter, &[line], &bent(11, 3..=9), 0.0005).len(), 4);
+        assert_eq!(combine(&inter, &[line], &positions(11), 0.0005).len(), 2);
     }
 
     #[test]

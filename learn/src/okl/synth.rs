@@ -102,11 +102,16 @@ impl DemoBuilder {
         ((length / speed) * self.rate).ceil().max(1.0) as usize
     }
 
-    /// Moves along a curve (a quadratic Bézier bulging `bulge` metres upwards off the chord)
-    /// to `to` at about `speed` m/s, easing in and out.
+    /// Moves along a curve (a quadratic Bézier whose control point stands off the chord's
+    /// middle by 0.3 of its length, upwards square to the chord, or sideways for a vertical
+    /// chord) to `to` at about `speed` m/s, easing in and out.
     pub fn curve(mut self, to: [f64; 3], speed: f64) -> Self {
         let (a, b) = (self.here(), Vector3::from(to));
-        let mid = (a + b) * 0.5 + Vector3::new(0.0, 0.0, 0.3 * (b - a).norm().max(0.02));
+        let chord = (b - a).try_normalize(1e-12).unwrap_or_else(Vector3::x);
+        let up = (Vector3::z() - chord * chord.z)
+            .try_normalize(1e-6)
+            .unwrap_or_else(Vector3::x);
+        let mid = (a + b) * 0.5 + up * 0.3 * (b - a).norm().max(0.02);
         let n = self.frames_for((b - a).norm() * 1.3, speed);
         for i in 1..=n {
             let s = ease(i as f64 / n as f64);

@@ -15,4 +15,4 @@ pub use calibration_moves::{
 };
 pub use motion::{min_jerk, Noise};
 pub use profile::{KeyframeHabit, TeacherProfile};
-pub use simulate::{demonstrate, SimulatedDemo};
+pub use simulate::{demonstrate, SimulatedDemo, SimulatedTeacher};

@@ -5,8 +5,13 @@ use serde::{Deserialize, Serialize};
 /// When a teacher marks keyframes in a keyframe demonstration (KD).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct KeyframeHabit {
-    /// Chance of forgetting to mark the end of a step.
+    /// Chance of forgetting to mark the end of a step the task needs a keyframe at (a grasp,
+    /// a release, either end of a line).
     pub miss_chance: f64,
+    /// Chance of marking the end of a free move the task needs no keyframe at (such as the
+    /// return to the start): a teacher told to mark as few keyframes as needed (thesis §4.1)
+    /// who marks it anyway.
+    pub free_move_mark: f64,
     /// Extra marks per step in the middle of the motion (a teacher who marks too often).
     pub extra_per_step: f64,
 }
@@ -30,6 +35,11 @@ pub struct TeacherProfile {
     pub curvature: f64,
     /// Chance that a free motion is made in an unintended straight line.
     pub unintended_line_chance: f64,
+    /// How much a suggestion ("Please do not move in a line unless the robot must move in a
+    /// line.") lowers that chance for the rest of the demonstration, as a fraction: 0 ignores
+    /// suggestions, 1 never moves straight again unless required. The thesis lets the teacher
+    /// accept or decline a suggestion and does not measure which; the presets take half.
+    pub suggestion_uptake: f64,
     /// Chance that an answer to "Do I have to move in a straight line there?" is wrong.
     pub wrong_answer_rate: f64,
     /// Chance that an answer is "I don't know" instead.
@@ -46,8 +56,8 @@ pub struct TeacherProfile {
 pub const MAX_RATE: f64 = 1000.0;
 
 impl TeacherProfile {
-    /// The careful teacher: no unintended lines, correct answers, marks every step. Noise of a
-    /// steady hand (1 mm tremor, 0.5 mm sensor noise).
+    /// The careful teacher: no unintended lines, correct answers, marks every keyframe the task
+    /// needs and no other. Noise of a steady hand (1 mm tremor, 0.5 mm sensor noise).
     pub fn careful() -> Self {
         TeacherProfile {
             speed: 0.12,
@@ -56,10 +66,12 @@ impl TeacherProfile {
             sensor_noise: 0.0005,
             curvature: 0.25,
             unintended_line_chance: 0.0,
+            suggestion_uptake: 0.5,
             wrong_answer_rate: 0.0,
             unknown_answer_rate: 0.0,
             keyframes: KeyframeHabit {
                 miss_chance: 0.0,
+                free_move_mark: 0.0,
                 extra_per_step: 0.0,
             },
             rate: 100.0,
@@ -79,10 +91,12 @@ impl TeacherProfile {
             sensor_noise: 0.0005,
             curvature: 0.2,
             unintended_line_chance: 0.25,
+            suggestion_uptake: 0.5,
             wrong_answer_rate: 0.2,
             unknown_answer_rate: 0.1,
             keyframes: KeyframeHabit {
                 miss_chance: 0.15,
+                free_move_mark: 0.5,
                 extra_per_step: 0.5,
             },
             rate: 100.0,
@@ -90,11 +104,12 @@ impl TeacherProfile {
         }
     }
 
-    /// A teacher who always moves straight in free space (to exercise the dialogue), otherwise
-    /// careful.
+    /// A teacher who always moves straight in free space, whatever it is told (to exercise
+    /// the dialogue), otherwise careful.
     pub fn straight() -> Self {
         TeacherProfile {
             unintended_line_chance: 1.0,
+            suggestion_uptake: 0.0,
             ..TeacherProfile::careful()
         }
     }
@@ -116,9 +131,11 @@ impl TeacherProfile {
     pub fn validate(&self) -> Result<(), String> {
         let probabilities = [
             ("unintended_line_chance", self.unintended_line_chance),
+            ("suggestion_uptake", self.suggestion_uptake),
             ("wrong_answer_rate", self.wrong_answer_rate),
             ("unknown_answer_rate", self.unknown_answer_rate),
             ("keyframes.miss_chance", self.keyframes.miss_chance),
+            ("keyframes.free_move_mark", self.keyframes.free_move_mark),
         ];
         if let Some((name, v)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
             return Err(format!("{name} = {v} is not a probability"));

@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
 use super::profile::TeacherProfile;
-use crate::demo::{Demo, DemoHeader};
+use crate::demo::{Demo, DemoHeader, DialogueEvent, DialogueKind};
 
 /// Fastest hand rotation the simulated teacher makes (rad/s).
 const ROTATION_SPEED: f64 = 0.8;
@@ -37,6 +37,22 @@ impl SimulatedDemo {
             .iter()
             .any(|x| *x)
     }
+
+    /// The recording with the teacher's keyframe marks as dialogue events, as a keyframe
+    /// demonstration (KD) records it: no detector ran, no question was asked.
+    pub fn with_marks(&self) -> Demo {
+        let mut demo = self.demo.clone();
+        demo.events = self
+            .marked_keyframes
+            .iter()
+            .map(|&frame| DialogueEvent {
+                t: demo.times[frame],
+                frame,
+                kind: DialogueKind::Keyframe,
+            })
+            .collect();
+        demo
+    }
 }
 
 /// How a motion gets from one pose to the next.
@@ -48,6 +64,8 @@ enum Path {
 
 struct Recorder<'a> {
     profile: &'a TeacherProfile,
+    /// The chance of an unintended line now: the profile's, lowered by suggestions heeded.
+    unintended_chance: f64,
     rng: ChaCha8Rng,
     noise: Noise,
     t: f64,
@@ -60,54 +78,108 @@ struct Recorder<'a> {
 
 /// Demonstrates `task` in `world` (normally the task's own world) as a teacher with `profile`;
 /// `seed` fixes every random choice. The error names a teaching step the world cannot support.
+///
+/// The whole demonstration is made without a learner listening, so no suggestion reaches the
+/// teacher; [`SimulatedTeacher`] demonstrates step by step for a live session.
 pub fn demonstrate(
     task: &Task,
     world: &World,
     profile: &TeacherProfile,
     seed: u64,
 ) -> Result<SimulatedDemo, String> {
-    profile.validate()?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let noise = Noise::new(profile.tremor, profile.sensor_noise, &mut rng);
-    let objects: Vec<(String, Pose)> = world
-        .objects
-        .iter()
-        .map(|o| (o.name.clone(), o.pose))
-        .collect();
-    let mut recorder = Recorder {
-        profile,
-        rng,
-        noise,
-        t: 0.0,
-        pose: task.teaching.start,
-        gripper: Gripper::Open,
-        objects: objects.clone(),
-        held: None,
-        out: SimulatedDemo {
-            demo: Demo::empty(
-                DemoHeader::new(task.name.clone()),
-                &objects.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
-            ),
-            intended_line: Vec::new(),
-            unintended_line: Vec::new(),
-            marked_keyframes: Vec::new(),
-        },
-    };
-    recorder.record(false, false);
-    recorder.dwell(profile.dwell / 2.0);
-    for (i, step) in task.teaching.steps.iter().enumerate() {
+    let mut teacher = SimulatedTeacher::new(task, world, profile, seed)?;
+    while teacher.next_step()? {}
+    Ok(teacher.finish())
+}
+
+/// A simulated teacher demonstrating a task one teaching step at a time, so that a learner
+/// can talk to it in between: after a suggestion it moves straight less often.
+pub struct SimulatedTeacher<'a> {
+    task: &'a Task,
+    recorder: Recorder<'a>,
+    next: usize,
+}
+
+impl<'a> SimulatedTeacher<'a> {
+    /// A teacher with `profile` at the task's start pose in `world`, having recorded its first
+    /// frames (the start and half a dwell).
+    pub fn new(
+        task: &'a Task,
+        world: &World,
+        profile: &'a TeacherProfile,
+        seed: u64,
+    ) -> Result<Self, String> {
+        profile.validate()?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = Noise::new(profile.tremor, profile.sensor_noise, &mut rng);
+        let objects: Vec<(String, Pose)> = world
+            .objects
+            .iter()
+            .map(|o| (o.name.clone(), o.pose))
+            .collect();
+        let mut recorder = Recorder {
+            profile,
+            unintended_chance: profile.unintended_line_chance,
+            rng,
+            noise,
+            t: 0.0,
+            pose: task.teaching.start,
+            gripper: Gripper::Open,
+            objects: objects.clone(),
+            held: None,
+            out: SimulatedDemo {
+                demo: Demo::empty(
+                    DemoHeader::new(task.name.clone()),
+                    &objects.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
+                ),
+                intended_line: Vec::new(),
+                unintended_line: Vec::new(),
+                marked_keyframes: Vec::new(),
+            },
+        };
+        recorder.record(false, false);
+        recorder.dwell(profile.dwell / 2.0);
+        Ok(SimulatedTeacher {
+            task,
+            recorder,
+            next: 0,
+        })
+    }
+
+    /// Records the next teaching step (after the last one, the closing dwell); false once
+    /// everything is recorded. The error names a step the world cannot support.
+    pub fn next_step(&mut self) -> Result<bool, String> {
+        let steps = &self.task.teaching.steps;
+        let profile = self.recorder.profile;
+        let Some(step) = steps.get(self.next) else {
+            if self.next == steps.len() {
+                self.recorder.dwell(profile.dwell / 2.0);
+                self.next += 1;
+                return Ok(true);
+            }
+            return Ok(false);
+        };
+        let i = self.next;
+        self.next += 1;
+        let recorder = &mut self.recorder;
         let at = |e: String| format!("teaching.steps[{i}] ({}): {e}", step.describe());
         let target = recorder.target(step).map_err(at)?;
         let path = match step {
             TeachStep::Line { .. } => Path::Straight { intended: true },
-            _ if recorder.rng.gen_bool(profile.unintended_line_chance) => {
+            _ if recorder.rng.gen_bool(recorder.unintended_chance) => {
                 Path::Straight { intended: false }
             }
             _ => Path::Curved,
         };
         let first_frame = recorder.out.demo.len();
         recorder.travel(target, path);
-        recorder.mark_keyframes(first_frame);
+        let needed = match step {
+            TeachStep::Move { .. } => {
+                matches!(steps.get(i + 1), Some(TeachStep::Line { .. }))
+            }
+            _ => true,
+        };
+        recorder.mark_keyframes(first_frame, needed);
         match step {
             TeachStep::Grasp { object, tcp } => {
                 let index = recorder.object_index(object).map_err(at)?;
@@ -124,9 +196,30 @@ pub fn demonstrate(
             }
             TeachStep::Move { .. } | TeachStep::Line { .. } => {}
         }
+        Ok(true)
     }
-    recorder.dwell(profile.dwell / 2.0);
-    Ok(recorder.out)
+
+    /// The learner suggested not moving in a line unless required: the teacher takes it to
+    /// heart as its profile says, lowering its chance of an unintended line by the fraction
+    /// [`TeacherProfile::suggestion_uptake`] for the rest of the demonstration.
+    pub fn heed_suggestion(&mut self) {
+        self.recorder.unintended_chance *= 1.0 - self.recorder.profile.suggestion_uptake;
+    }
+
+    /// The chance that the next free motion is an unintended line.
+    pub fn unintended_line_chance(&self) -> f64 {
+        self.recorder.unintended_chance
+    }
+
+    /// What has been recorded so far.
+    pub fn recorded(&self) -> &SimulatedDemo {
+        &self.recorder.out
+    }
+
+    /// The whole recording.
+    pub fn finish(self) -> SimulatedDemo {
+        self.recorder.out
+    }
 }
 
 /// A circular arc from one point to another, bowing out by its sagitta: a hand's free reach
@@ -267,8 +360,10 @@ impl Recorder<'_> {
         self.out.unintended_line.push(unintended);
     }
 
-    /// Marks the end of the motion just made, and extra frames inside it, per the habit.
-    fn mark_keyframes(&mut self, first_frame: usize) {
+    /// Marks the end of the motion just made, and extra frames inside it, per the habit: the
+    /// end of a step the task needs a keyframe at (`needed`: a grasp, a release, a line's
+    /// ends) unless forgotten, the end of any other free move by habit.
+    fn mark_keyframes(&mut self, first_frame: usize, needed: bool) {
         let last = self.out.demo.len() - 1;
         let habit = self.profile.keyframes;
         let whole = habit.extra_per_step.floor() as usize;
@@ -277,7 +372,12 @@ impl Recorder<'_> {
             .filter(|_| last > first_frame + 2)
             .map(|_| self.rng.gen_range(first_frame + 1..last))
             .collect();
-        if !self.rng.gen_bool(habit.miss_chance) {
+        let marked = if needed {
+            !self.rng.gen_bool(habit.miss_chance)
+        } else {
+            self.rng.gen_bool(habit.free_move_mark)
+        };
+        if marked {
             marks.push(last);
         }
         marks.sort_unstable();

@@ -1,0 +1,234 @@
+//! `akl eval`: the simulated study.
+
+use super::print_json;
+use super::robot::load as load_robot;
+use crate::cli::{EvalArgs, RobotArg};
+use crate::exit::{CliError, CliResult};
+use crate::table::Table;
+use akl_eval::plots::method_label;
+use akl_eval::records::write_records;
+use akl_eval::study::{run_study, Executor, Study, StudyOptions, Trial};
+use akl_eval::summary::{
+    summarize, Summary, TABLE_ORDER, THESIS_CONSTRAINT_ERRORS, THESIS_SUCCESS,
+};
+use akl_exec::batch::{Batch, BatchOptions};
+use akl_exec::trial::ExecOptions;
+use akl_planner::Robot;
+use akl_scene::{builtin, Task};
+use akl_tsr::TaskSpec;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Executes learned specs through the execution engine's batch API: the one place the study
+/// meets the robot and the simulation.
+struct Simulation {
+    robot: Robot,
+}
+
+impl Executor for Simulation {
+    fn pass_rate(
+        &self,
+        spec: &TaskSpec,
+        task: &Task,
+        trials: usize,
+        seed: u64,
+    ) -> Result<f64, String> {
+        let exec = ExecOptions::default();
+        let options = BatchOptions {
+            trials,
+            randomize: true,
+            seed,
+            jobs: 1,
+        };
+        let batch =
+            Batch::new(&self.robot, task, spec, &exec, options).map_err(|e| e.to_string())?;
+        let report = batch.run(&|_| {}).map_err(|e| e.to_string())?;
+        Ok(report.passed as f64 / report.trials as f64)
+    }
+}
+
+/// What `--json` prints.
+#[derive(Serialize)]
+struct Evaluated<'a> {
+    participants: usize,
+    seed: u64,
+    executions_per_spec: Option<usize>,
+    wall_s: f64,
+    files: Vec<String>,
+    summary: &'a Summary,
+    trials: Vec<&'a Trial>,
+}
+
+pub fn run(args: EvalArgs) -> CliResult {
+    if args.participants == 0 {
+        return Err(CliError::input("--participants: needs at least one"));
+    }
+    if args.execute == Some(0) {
+        return Err(CliError::input(
+            "--execute: needs at least one run per spec",
+        ));
+    }
+    if let Some(dir) = &args.out {
+        prepare_folder(dir)?;
+    }
+    let tasks: Vec<Task> = builtin::names()
+        .into_iter()
+        .map(builtin::resolve)
+        .collect::<Result<_, _>>()
+        .map_err(CliError::internal)?;
+    let names: Vec<String> = tasks.iter().map(|t| t.name.clone()).collect();
+    let simulation = match args.execute {
+        Some(_) => Some(Simulation {
+            robot: load_robot(&RobotArg { robot: None })?,
+        }),
+        None => None,
+    };
+    let options = StudyOptions {
+        participants: args.participants,
+        seed: args.seed,
+        tasks: &tasks,
+        execute: simulation
+            .as_ref()
+            .zip(args.execute)
+            .map(|(s, n)| (s as &dyn Executor, n)),
+    };
+    let total = args.participants * 3 * tasks.len();
+    let bar = ProgressBar::new(total as u64).with_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} trials, {elapsed} ({eta} left)")
+            .map_err(CliError::internal)?
+            .progress_chars("#>-"),
+    );
+    bar.set_message("simulated study");
+    let started = std::time::Instant::now();
+    let study = run_study(&options, &|_| bar.inc(1));
+    bar.finish_and_clear();
+    let study = study.map_err(CliError::internal)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let summary = summarize(&study.trials, &names);
+    let files = match &args.out {
+        Some(dir) => write_records(dir, &study, &summary, &names)
+            .map_err(CliError::internal)?
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+        None => Vec::new(),
+    };
+    if args.json {
+        return print_json(&Evaluated {
+            participants: args.participants,
+            seed: args.seed,
+            executions_per_spec: args.execute,
+            wall_s,
+            files,
+            summary: &summary,
+            trials: study.trials.iter().collect(),
+        });
+    }
+    print_study(&study, &summary, wall_s);
+    for f in &files {
+        println!("wrote {f}");
+    }
+    Ok(())
+}
+
+/// Creates the output folder if missing; a file in its place is bad input.
+fn prepare_folder(dir: &PathBuf) -> Result<(), CliError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: is a file; --out needs a folder",
+            dir.display()
+        )));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::input(format!("{}: cannot create the folder: {e}", dir.display())))
+}
+
+fn percent(x: f64) -> String {
+    format!("{x:.1}")
+}
+
+/// Prints the tables: success (Table 4.1), constraint errors (Table 4.2), runtime, passes.
+fn print_study(study: &Study, summary: &Summary, wall_s: f64) {
+    let experienced = study.participants.iter().filter(|p| p.experienced).count();
+    println!(
+        "simulated study: {} participants ({experienced} experienced with robots), seed {}, {} trials in {wall_s:.1} s",
+        study.participants.len(),
+        study.seed,
+        study.trials.len()
+    );
+    println!("\nsuccess rate, % (cf. thesis Table 4.1, case (a); thesis values in brackets)");
+    let mut t = Table::new(["task", "KD", "mACL", "AKL"]);
+    for row in &summary.success {
+        let thesis = THESIS_SUCCESS.iter().find(|(n, _)| *n == row.task);
+        let mut cells = vec![row.task.clone()];
+        for (i, m) in TABLE_ORDER.iter().enumerate() {
+            let r = row.rate(*m);
+            let reference = thesis.map_or(String::new(), |(_, v)| format!(" ({})", percent(v[i])));
+            cells.push(format!(
+                "{} ({}/{}){reference}",
+                percent(r.percent),
+                r.successes,
+                r.trials
+            ));
+        }
+        t.row(cells);
+    }
+    print!("{}", t.render());
+    let c = &summary.constraint_errors;
+    let th = &THESIS_CONSTRAINT_ERRORS;
+    println!("\nconstraint errors (cf. thesis Table 4.2)");
+    let mut t = Table::new(["", "simulated", "thesis"]);
+    for (what, sim, thesis) in [
+        ("AKL: constraint errors", c.akl_errors, th.akl_errors),
+        (
+            "AKL: due to answers",
+            c.akl_errors_from_answers,
+            th.akl_errors_from_answers,
+        ),
+        (
+            "AKL: avoided by answers",
+            c.akl_errors_avoided,
+            th.akl_errors_avoided,
+        ),
+        ("mACL: constraint errors", c.macl_errors, th.macl_errors),
+    ] {
+        t.row(vec![what.into(), sim.to_string(), thesis.to_string()]);
+    }
+    print!("{}", t.render());
+    println!("\nlearning runtime per trial (cf. thesis §4.6.8: AKL 0.011 s, KD 0.001 s, mACL 2.64 s mean)");
+    let mut t = Table::new(["method", "mean", "median", "max"]);
+    for r in &summary.runtime {
+        t.row(vec![
+            method_label(r.method).into(),
+            seconds(r.mean_s),
+            seconds(r.median_s),
+            seconds(r.max_s),
+        ]);
+    }
+    print!("{}", t.render());
+    if let Some(rows) = &summary.pass_rates {
+        println!("\nmean pass rate in simulation, %");
+        let mut t = Table::new(["task", "KD", "mACL", "AKL"]);
+        for row in rows {
+            let mut cells = vec![row.task.clone()];
+            cells.extend(
+                row.mean_pass_rate
+                    .iter()
+                    .map(|r| r.map_or("-".into(), |r| percent(100.0 * r))),
+            );
+            t.row(cells);
+        }
+        print!("{}", t.render());
+    }
+}
+
+fn seconds(s: f64) -> String {
+    if s < 1e-3 {
+        format!("{:.1} µs", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
+}
