@@ -33,6 +33,7 @@
 //! Everything is deterministic for a given seed.
 
 use crate::collision::{Allowances, Checker, Held, RobotCollision, Scene};
+use crate::contact_rules::Step;
 use crate::error::PlanError;
 use crate::goal::{find_goals, GoalFailure, GoalOptions, GoalStrategy};
 use crate::line::{distance_to_segment, plan_line, LineFailure, LineOptions};
@@ -201,13 +202,6 @@ pub(crate) fn plan_candidate(
     })
 }
 
-/// Adds `name` to `list` unless it is there already.
-fn add(list: &mut Vec<String>, name: &str) {
-    if !list.iter().any(|n| n == name) {
-        list.push(name.to_string());
-    }
-}
-
 /// The pose `distance` back along the tool z axis from `pose`.
 fn backed_off(pose: &Pose, distance: f64) -> Pose {
     pose * Translation3::new(0.0, 0.0, -distance)
@@ -240,6 +234,24 @@ fn line_error(segment: String, failure: &LineFailure) -> PlanError {
     PlanError::Line {
         segment,
         reason: failure.to_string(),
+    }
+}
+
+impl Step<'_> {
+    /// What a step reaching keyframe with `event` manipulates: the object it grasps, or the
+    /// support it puts the held object on.
+    fn at(event: Option<&Event>) -> Step<'_> {
+        match event {
+            Some(Event::Grasp { object }) => Step {
+                grasping: Some(object),
+                ..Step::default()
+            },
+            Some(Event::Release { support }) => Step {
+                placing_on: Some(support),
+                ..Step::default()
+            },
+            None => Step::default(),
+        }
     }
 }
 
@@ -427,21 +439,12 @@ impl<'a> Planner<'a> {
 
     /// Allowances on a line that ends at keyframe `i` with `event`.
     fn line_allowances(&self, event: Option<&Event>) -> Allowances {
-        let mut allow = Allowances::default();
-        if let Some(object) = &self.just_released {
-            add(&mut allow.hand_may_touch, object);
+        Step {
+            released: self.just_released.as_deref(),
+            resting_on: self.holding.as_ref().and_then(|h| h.resting_on.as_deref()),
+            ..Step::at(event)
         }
-        if let Some(support) = self.holding.as_ref().and_then(|h| h.resting_on.as_ref()) {
-            add(&mut allow.held_may_touch, support);
-        }
-        match event {
-            Some(Event::Grasp { object }) => add(&mut allow.hand_may_touch, object),
-            Some(Event::Release { support }) if support != WORLD_FRAME => {
-                add(&mut allow.held_may_touch, support)
-            }
-            _ => {}
-        }
-        allow
+        .allowances()
     }
 
     fn reach_by_line(
@@ -518,10 +521,11 @@ impl<'a> Planner<'a> {
         };
         let started = Instant::now();
         let up = backed_off(&self.tcp_world(&self.q), self.options.approach_distance);
-        let allow = Allowances {
-            hand_may_touch: Vec::new(),
-            held_may_touch: vec![support],
-        };
+        let allow = Step {
+            resting_on: Some(&support),
+            ..Step::default()
+        }
+        .allowances();
         let lift = self
             .line_to(&up, &allow)
             .map_err(|f| line_error(format!("lift before keyframe {i}"), &f))?;
@@ -544,15 +548,8 @@ impl<'a> Planner<'a> {
         self.lift_resting(i)?;
         let scene = self.scene();
         let checker = Checker::new(self.robot, &self.model, &scene);
-        let free_allow = Allowances::default();
-        let mut at_allow = Allowances::default();
-        match event {
-            Some(Event::Grasp { object }) => at_allow.hand_may_touch.push(object.clone()),
-            Some(Event::Release { support }) if support != WORLD_FRAME => {
-                at_allow.held_may_touch.push(support.clone())
-            }
-            _ => {}
-        }
+        let free_allow = Step::default().allowances();
+        let at_allow = Step::at(event).allowances();
         let at_space = Space {
             checker: &checker,
             width: self.width,
@@ -700,10 +697,11 @@ impl<'a> Planner<'a> {
                 world.objects.retain(|x| x.name != *object);
                 let scene = Scene::new(&world, &[]);
                 let checker = Checker::new(self.robot, &self.model, &scene);
-                let allow = Allowances {
-                    hand_may_touch: Vec::new(),
-                    held_may_touch: support.into_iter().collect(),
-                };
+                let allow = Step {
+                    resting_on: support.as_deref(),
+                    ..Step::default()
+                }
+                .allowances();
                 for w in approach.windows(2).rev() {
                     if let Some(hit) = checker.edge(&w[1], &w[0], width, Some(&held), &allow) {
                         return Err(format!("lift: {hit}"));
@@ -721,10 +719,11 @@ impl<'a> Planner<'a> {
                 }
                 let scene = Scene::new(&world, &[]);
                 let checker = Checker::new(self.robot, &self.model, &scene);
-                let allow = Allowances {
-                    hand_may_touch: vec![h.held.name.clone()],
-                    held_may_touch: Vec::new(),
-                };
+                let allow = Step {
+                    released: Some(&h.held.name),
+                    ..Step::default()
+                }
+                .allowances();
                 for w in approach.windows(2).rev() {
                     let open = self.robot.open_width();
                     if let Some(hit) = checker.edge(&w[1], &w[0], open, None, &allow) {
@@ -766,31 +765,29 @@ impl<'a> Planner<'a> {
                 resting_on: world.support_of(object).map(|s| s.name.clone()),
             });
         }
-        let mut allow = Allowances::default();
+        let mut released = None;
         if let Some(Event::Release { .. }) = event {
             if let Some(h) = holding.take() {
                 if let Some(o) = world.object_mut(&h.held.name) {
                     o.pose = pose * h.held.in_tcp;
                 }
-                add(&mut allow.hand_may_touch, &h.held.name);
                 width = self.robot.open_width();
+                released = Some(h.held.name);
             }
         }
         let without: Vec<String> = holding.iter().map(|h| h.held.name.clone()).collect();
         world.objects.retain(|o| !without.contains(&o.name));
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(self.robot, &self.model, &scene);
-        if let Some(s) = holding.as_ref().and_then(|h| h.resting_on.as_ref()) {
-            add(&mut allow.held_may_touch, s);
-        }
         let next_closes = next.gripper == Gripper::Closed && holding.is_none();
         let next_opens = next.gripper == Gripper::Open && holding.is_some();
-        if next_closes {
-            add(&mut allow.hand_may_touch, &next.reference);
+        let allow = Step {
+            grasping: next_closes.then_some(next.reference.as_str()),
+            released: released.as_deref(),
+            resting_on: holding.as_ref().and_then(|h| h.resting_on.as_deref()),
+            placing_on: next_opens.then_some(next.reference.as_str()),
         }
-        if next_opens && next.reference != WORLD_FRAME {
-            add(&mut allow.held_may_touch, &next.reference);
-        }
+        .allowances();
         let space = Space {
             checker: &checker,
             width,
@@ -879,14 +876,15 @@ impl<'a> Planner<'a> {
             held: Held::new(object, o.shape, in_tcp, self.model.margins().held),
             resting_on: support.clone(),
         });
-        let resting = Allowances {
-            hand_may_touch: Vec::new(),
-            held_may_touch: support.iter().cloned().collect(),
-        };
-        let closing = crate::contact_rules::Step {
+        let resting = Step {
+            resting_on: support.as_deref(),
+            ..Step::default()
+        }
+        .allowances();
+        let closing = Step {
             grasping: Some(object),
             resting_on: support.as_deref(),
-            ..Default::default()
+            ..Step::default()
         };
         self.gripper_segment(i, width, closing.allowances());
         if next_line {
@@ -943,13 +941,12 @@ impl<'a> Planner<'a> {
             width: self.robot.open_width(),
             object_pose: placed,
         });
-        let released = Allowances {
-            hand_may_touch: vec![name.clone()],
-            held_may_touch: (support != WORLD_FRAME)
-                .then(|| support.to_string())
-                .into_iter()
-                .collect(),
-        };
+        let released = Step {
+            released: Some(&name),
+            placing_on: Some(support),
+            ..Step::default()
+        }
+        .allowances();
         self.gripper_segment(i, self.robot.open_width(), released);
         self.holding = None;
         if let Some(o) = self.world.object_mut(&name) {
@@ -960,10 +957,11 @@ impl<'a> Planner<'a> {
             return Ok(());
         }
         let started = Instant::now();
-        let allow = Allowances {
-            hand_may_touch: vec![name],
-            held_may_touch: Vec::new(),
-        };
+        let allow = Step {
+            released: Some(&name),
+            ..Step::default()
+        }
+        .allowances();
         let retreat = match approach {
             Some(mut path) => {
                 path.reverse();
