@@ -271,6 +271,10 @@ pub struct ExecuteArgs {
     /// link transforms over time, objects, keyframe TSRs, lines and events.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
+    /// Planning budget per trial in milliseconds (as `akl plan --budget`); 0 plans one
+    /// candidate, the nominal-first plan.
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    pub budget: u64,
     /// Which trial `--trace` writes (default: the first that failed, else the first).
     #[arg(long, value_name = "N", requires = "trace")]
     pub trace_trial: Option<usize>,

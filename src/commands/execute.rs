@@ -11,7 +11,8 @@ use akl_exec::error::ExecError;
 use akl_exec::perception::PoseNoise;
 use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
-use akl_planner::Robot;
+use akl_planner::search::PlanBudget;
+use akl_planner::{PlanOptions, Robot};
 use akl_scene::{builtin, Task};
 use akl_tsr::{FileError, TaskSpec};
 use serde::Serialize;
@@ -77,6 +78,10 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         trace: args.trace.as_deref(),
         trace_trial: args.trace_trial,
         options: ExecOptions {
+            plan: PlanOptions {
+                budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
+                ..PlanOptions::default()
+            },
             noise: PoseNoise {
                 position: args.pose_noise.millimetres * 1e-3,
                 yaw: args.pose_noise.degrees.to_radians(),
