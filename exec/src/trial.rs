@@ -13,7 +13,7 @@ use crate::verify::{check_goals, check_keyframe, check_line, check_rest};
 use crate::world::{Physics, SimWorld};
 use akl_planner::collision::Allowances;
 use akl_planner::{plan_task, GripperAction, Plan, PlanError, PlanOptions, Robot, SegmentKind};
-use akl_scene::{Task, World};
+use akl_scene::{ObjectPaths, Task, World};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::{Pose, PoseJson, TaskSpec, WORLD_FRAME};
 use std::time::Instant;
@@ -344,6 +344,7 @@ impl<'a> Execution<'a> {
         let mut next_action = 0;
         let mut line_paths: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); plan.segments.len()];
         let mut next_frame = 0.0;
+        let mut paths = ObjectPaths::new();
         if let Some(tl) = timeline.as_deref_mut() {
             tl.plan = Some(plan.clone());
         }
@@ -407,6 +408,15 @@ impl<'a> Execution<'a> {
                 h.follow(&mut self.sim, &tcp);
             }
             self.sim.step();
+            for (i, o) in self
+                .sim
+                .objects
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.movable)
+            {
+                paths.push(&o.name, t_next, self.sim.object_pose(i));
+            }
             if let (Some(allowed), Some(label)) = (self.allowed.get(seg), self.labels.get(seg)) {
                 let held = self.held.map(|h| h.object);
                 self.contacts
@@ -483,7 +493,7 @@ impl<'a> Execution<'a> {
         }
         report.collisions = self.contacts.collisions().to_vec();
         let now = self.sim.snapshot();
-        let mut goals = check_goals(self.setup.task, &now);
+        let mut goals = check_goals(self.setup.task, &now, &paths);
         let speeds: Vec<(String, f64, f64)> = (0..self.sim.objects.len())
             .filter(|&i| self.sim.objects[i].movable)
             .map(|i| {

@@ -3,7 +3,7 @@
 
 use crate::report::{KeyframeCheck, LineCheck};
 use akl_planner::line::distance_to_segment;
-use akl_scene::{GoalCheck, Task, World};
+use akl_scene::{GoalCheck, ObjectPaths, Task, World};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::{Bounds, Keyframe, Pose, PoseJson};
 
@@ -67,12 +67,9 @@ pub fn check_line(
     }
 }
 
-/// The task's goal predicates on the settled world `now`.
-pub fn check_goals(task: &Task, now: &World) -> Vec<GoalCheck> {
-    task.goals
-        .iter()
-        .map(|g| g.check(now, &task.world))
-        .collect()
+/// The task's goal predicates on the settled world `now` and the objects' sampled `paths`.
+pub fn check_goals(task: &Task, now: &World, paths: &ObjectPaths) -> Vec<GoalCheck> {
+    task.check_goals(now, paths)
 }
 
 /// The rest check: every movable object slower than `max_speed` (m/s, and 10 × that in rad/s)
