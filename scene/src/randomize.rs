@@ -181,6 +181,21 @@ mod tests {
         assert!(e.contains("seed 1") && e.contains("block_a"), "{e}");
     }
 
+    /// The share of draws the built-in tasks accept (printed with `--nocapture`; quoted in
+    /// tasks/README.md).
+    #[test]
+    fn the_built_in_tasks_accept_most_draws() {
+        for name in builtin::names() {
+            let t = builtin::task(name).unwrap().unwrap();
+            let rejected: usize = (0..500)
+                .map(|s| randomize_layout(&t, s).unwrap().rejected.len())
+                .sum();
+            let accepted = 500.0 / (500 + rejected) as f64;
+            println!("{name}: {:.1} % of draws accepted", 100.0 * accepted);
+            assert!(accepted > 1.0 / 3.0, "{name}: {accepted}");
+        }
+    }
+
     #[test]
     fn rejections_say_why() {
         let t = builtin::task("pick_place").unwrap().unwrap();

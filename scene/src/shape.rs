@@ -101,11 +101,16 @@ impl Shape {
     /// this shape's outline at `pose`: the largest [`Shape::outline_excess`] of the corners of
     /// `other`'s bounding box. Negative when it lies inside with that much to spare.
     pub fn overhang(&self, pose: &Pose, other: &Shape, other_pose: &Pose) -> f64 {
-        other
-            .corners(other_pose)
+        self.outline_excess_of(pose, &other.corners(other_pose))
+    }
+
+    /// The largest [`Shape::outline_excess`] of world `points` for this shape at `pose`.
+    pub fn outline_excess_of(&self, pose: &Pose, points: &[Point3<f64>]) -> f64 {
+        let to_local = pose.inverse();
+        points
             .iter()
             .map(|c| {
-                let local = pose.inverse_transform_point(c);
+                let local = to_local * c;
                 self.outline_excess(local.x, local.y)
             })
             .fold(f64::NEG_INFINITY, f64::max)
