@@ -75,7 +75,7 @@ fn task_show_lists_every_range_group_and_fixed_relation() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["groups"]["clamp"].as_array().unwrap().len(), 4);
     assert_eq!(v["randomize"]["clamp"]["yaw"][1], 0.2);
-    assert_eq!(v["min_gap"], 0.05);
+    assert_eq!(v["min_gap"], 0.055);
     assert_eq!(v["goals"][1]["inside"]["holder"], "clamp_top");
 }
 
@@ -95,7 +95,12 @@ fn bad_task_file_values_name_the_field_and_exit_2() {
             "\"height\": [0.08, 0.02]",
             "goals[0] (scan).height",
         ),
-        ("min_gap", "\"min_gap\": 0.05", "\"min_gap\": -1", "min_gap"),
+        (
+            "min_gap",
+            "\"min_gap\": 0.055",
+            "\"min_gap\": -1",
+            "min_gap",
+        ),
         (
             "group",
             "[\"scanner_1\", \"scanner_2\", \"scanner_3\"]},",

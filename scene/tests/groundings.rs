@@ -73,6 +73,10 @@ fn a_keyframe_grounded_on_an_object_the_layouts_move_apart_lands_outside_its_tsr
                         .iter()
                         .any(|n| *n != "pipe" && t.held_together(n, "rail").unwrap());
                 let least = if slide_only { 0.6 } else { 0.95 };
+                println!(
+                    "{name} keyframe {k} on {other} instead of {}: outside its TSR in {missed:.3}",
+                    kf.reference
+                );
                 assert!(
                     missed >= least,
                     "{name} keyframe {k} on {other} instead of {}: outside the TSR in only {missed:.3} of layouts",
@@ -132,6 +136,7 @@ fn the_scan_line_must_be_grounded_on_the_scanner_row() {
     }
     for other in ["world", "table", "shelf_1", "shelf_2", "part"] {
         let failed = share(&worlds, |w| fails(other, w));
+        println!("scan line on {other}: the goal fails in {failed:.3} of layouts");
         assert!(
             failed >= 0.9,
             "scan line on {other}: fails in only {failed:.3}"
@@ -158,6 +163,7 @@ fn the_slide_into_the_clamp_must_be_grounded_on_the_clamp() {
     }
     for other in ["world", "table", "shelf_1", "shelf_2", "block"] {
         let failed = share(&worlds, |w| fails(other, w));
+        println!("clamp line on {other}: the goal fails in {failed:.3} of layouts");
         assert!(
             failed >= 0.9,
             "clamp line on {other}: fails in only {failed:.3}"
