@@ -9,7 +9,7 @@ use akl_tsr::nalgebra::{Point3, Translation3, UnitQuaternion, Vector3};
 use akl_tsr::{Pose, WORLD_FRAME};
 use rand::Rng;
 use serde::Serialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// One rigid body of the randomization: an object, or a group of furniture moved as one.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,90 +47,28 @@ pub struct FixedRelation {
     pub because: String,
 }
 
+/// A rigid body of the randomization before it is ordered: (name, is a group, members).
+type Body = (String, bool, Vec<String>);
+
 impl Motion {
     /// How `task`'s randomization moves its objects. A group or object rides on the mover of
     /// what its lowest member stands on in the task file (when that is outside itself). Fails
-    /// when groups carry each other in a circle, naming the group.
+    /// when movers carry each other in a circle, naming one of them.
     pub fn of(task: &Task) -> Result<Motion, SceneError> {
         let world = &task.world;
-        let mut movers = Vec::new();
-        let mut grouped = BTreeMap::new();
-        for (name, members) in &task.groups {
-            for m in members {
-                grouped.insert(m.as_str(), name.as_str());
-            }
-            movers.push((name.clone(), true, members.clone()));
-        }
-        for o in world
-            .objects
-            .iter()
-            .filter(|o| !grouped.contains_key(o.name.as_str()))
-        {
-            movers.push((o.name.clone(), false, vec![o.name.clone()]));
-        }
-        let index: BTreeMap<String, usize> = movers
-            .iter()
-            .enumerate()
-            .flat_map(|(i, (_, _, members))| members.iter().map(move |m| (m.clone(), i)))
-            .collect();
-        let carriers: Vec<Option<usize>> = movers
-            .iter()
-            .enumerate()
-            .map(|(i, (_, _, members))| {
-                let mut by_height: Vec<&str> = members.iter().map(String::as_str).collect();
-                let bottom = |n: &str| world.object(n).map_or(0.0, |o| o.shape.bottom(&o.pose));
-                by_height.sort_by(|a, b| bottom(a).total_cmp(&bottom(b)));
-                by_height.iter().find_map(|m| {
-                    let support = world.support_of(m)?;
-                    let carrier = index.get(&support.name).copied()?;
-                    (carrier != i).then_some(carrier)
-                })
-            })
-            .collect();
-        let mut depth = vec![None; movers.len()];
-        for start in 0..movers.len() {
-            let mut chain = vec![start];
-            let mut at = start;
-            while depth[at].is_none() {
-                match carriers[at] {
-                    None => {
-                        depth[at] = Some(0);
-                        break;
-                    }
-                    Some(c) if chain.contains(&c) => {
-                        let name = &movers[c].0;
-                        let location = if movers[c].1 {
-                            format!("groups.{name}")
-                        } else {
-                            format!("world.objects ({name})")
-                        };
-                        return Err(SceneError::invalid(
-                            location,
-                            "rests, through what stands on it, on itself",
-                        ));
-                    }
-                    Some(c) => {
-                        chain.push(c);
-                        at = c;
-                    }
-                }
-            }
-            let mut d = depth[at].unwrap_or(0);
-            for &m in chain.iter().rev().skip(1) {
-                d += 1;
-                depth[m] = Some(d);
-            }
-        }
-        let mut order: Vec<usize> = (0..movers.len()).collect();
-        order.sort_by(|&a, &b| depth[a].cmp(&depth[b]).then(movers[a].0.cmp(&movers[b].0)));
-        let mut position = vec![0; movers.len()];
+        let bodies = bodies(task);
+        let carriers = carriers(world, &bodies);
+        let depth = depths(&bodies, &carriers)?;
+        let mut order: Vec<usize> = (0..bodies.len()).collect();
+        order.sort_by(|&a, &b| depth[a].cmp(&depth[b]).then(bodies[a].0.cmp(&bodies[b].0)));
+        let mut position = vec![0; bodies.len()];
         for (new, &old) in order.iter().enumerate() {
             position[old] = new;
         }
-        let sorted: Vec<Mover> = order
+        let movers: Vec<Mover> = order
             .iter()
             .map(|&old| {
-                let (name, group, members) = movers[old].clone();
+                let (name, group, members) = bodies[old].clone();
                 let centres: Vec<Vector3<f64>> = members
                     .iter()
                     .filter_map(|m| world.object(m))
@@ -147,15 +85,12 @@ impl Motion {
                 }
             })
             .collect();
-        let mover_of = sorted
+        let mover_of = movers
             .iter()
             .enumerate()
             .flat_map(|(i, m)| m.members.iter().map(move |n| (n.clone(), i)))
             .collect();
-        Ok(Motion {
-            movers: sorted,
-            mover_of,
-        })
+        Ok(Motion { movers, mover_of })
     }
 
     /// The mover that moves object `name`.
@@ -241,6 +176,80 @@ impl Motion {
     }
 }
 
+/// The task's rigid bodies: its groups (by name), then every object in no group (file order).
+fn bodies(task: &Task) -> Vec<Body> {
+    let grouped: BTreeSet<&str> = task.groups.values().flatten().map(String::as_str).collect();
+    let groups = task
+        .groups
+        .iter()
+        .map(|(name, members)| (name.clone(), true, members.clone()));
+    let singles = task
+        .world
+        .objects
+        .iter()
+        .filter(|o| !grouped.contains(o.name.as_str()))
+        .map(|o| (o.name.clone(), false, vec![o.name.clone()]));
+    groups.chain(singles).collect()
+}
+
+/// For each body, the body it rides on: the one holding what its lowest member with a support
+/// outside the body stands on in `world`.
+fn carriers(world: &World, bodies: &[Body]) -> Vec<Option<usize>> {
+    let body_of: BTreeMap<&str, usize> = bodies
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (_, _, members))| members.iter().map(move |m| (m.as_str(), i)))
+        .collect();
+    let bottom = |n: &str| world.object(n).map_or(0.0, |o| o.shape.bottom(&o.pose));
+    bodies
+        .iter()
+        .enumerate()
+        .map(|(i, (_, _, members))| {
+            let mut by_height: Vec<&str> = members.iter().map(String::as_str).collect();
+            by_height.sort_by(|a, b| bottom(a).total_cmp(&bottom(b)));
+            by_height.iter().find_map(|m| {
+                let carrier = *body_of.get(world.support_of(m)?.name.as_str())?;
+                (carrier != i).then_some(carrier)
+            })
+        })
+        .collect()
+}
+
+/// How many carriers lie under each body; an error names a body that, through its carriers,
+/// rides on itself.
+fn depths(bodies: &[Body], carriers: &[Option<usize>]) -> Result<Vec<usize>, SceneError> {
+    let mut depth: Vec<Option<usize>> = vec![None; bodies.len()];
+    for start in 0..bodies.len() {
+        // Walk down to a body of known depth (or one on nothing), then number the way back up.
+        let mut chain = vec![start];
+        while depth[chain[chain.len() - 1]].is_none() {
+            let at = chain[chain.len() - 1];
+            match carriers[at] {
+                None => depth[at] = Some(0),
+                Some(c) if chain.contains(&c) => {
+                    let (name, group, _) = &bodies[c];
+                    let location = if *group {
+                        format!("groups.{name}")
+                    } else {
+                        format!("world.objects ({name})")
+                    };
+                    return Err(SceneError::invalid(
+                        location,
+                        "rides, through what it carries, on itself",
+                    ));
+                }
+                Some(c) => chain.push(c),
+            }
+        }
+        let mut d = depth[chain[chain.len() - 1]].unwrap_or(0);
+        for &body in chain.iter().rev().skip(1) {
+            d += 1;
+            depth[body] = Some(d);
+        }
+    }
+    Ok(depth.into_iter().map(|d| d.unwrap_or(0)).collect())
+}
+
 fn sample<R: Rng + ?Sized>(rng: &mut R, [lo, hi]: [f64; 2]) -> f64 {
     if hi > lo {
         rng.gen_range(lo..=hi)
@@ -313,6 +322,35 @@ mod tests {
                 "{d:?}"
             );
         }
+    }
+
+    #[test]
+    fn movers_that_carry_each_other_are_refused_by_name() {
+        use crate::{Object, Shape};
+        use akl_tsr::pose::pose_from_xyz;
+        let mut t = builtin::task("pick_place").unwrap().unwrap();
+        // A floating cube, a cube on it, a third on that; the first and third form a group, so
+        // the group rides (through its third member) on the middle cube, which rides on it.
+        for (name, z) in [("low", 0.5), ("middle", 0.6), ("high", 0.7)] {
+            t.world.objects.push(Object {
+                name: name.into(),
+                shape: Shape::Box {
+                    size: [0.1, 0.1, 0.1],
+                },
+                pose: pose_from_xyz([0.0, 0.6, z]),
+                movable: false,
+                mass: 0.0,
+                friction: 0.5,
+            });
+        }
+        t.groups
+            .insert("stack".into(), vec!["low".into(), "high".into()]);
+        let e = Motion::of(&t).unwrap_err().to_string();
+        assert!(
+            e.contains("rides, through what it carries, on itself"),
+            "{e}"
+        );
+        assert!(e.contains("stack") || e.contains("middle"), "{e}");
     }
 
     #[test]

@@ -68,22 +68,28 @@ mod tests {
         }
     }
 
-    /// A rejected draw is redrawn from the same seed's generator: the seed's layout is the
-    /// first feasible draw of its own stream, whatever other seeds do.
+    /// A rejected draw is redrawn from the same seed's generator: replaying that generator
+    /// gives the rejected draws for the reasons reported, then the layout; nothing else (other
+    /// seeds, threads) enters.
     #[test]
-    fn redraws_are_stable_per_seed() {
+    fn redraws_come_from_the_seeds_own_generator() {
         let t = builtin::task("pick_place").unwrap().unwrap();
-        let redrawn: Vec<u64> = (0..200)
-            .filter(|&s| !randomize_layout(&t, s).unwrap().rejected.is_empty())
-            .collect();
-        assert!(!redrawn.is_empty(), "pick_place rejects some draws");
-        let once: Vec<World> = redrawn.iter().map(|&s| randomize(&t, s).unwrap()).collect();
-        let interleaved: Vec<World> = redrawn
-            .iter()
-            .rev()
-            .map(|&s| randomize(&t, s).unwrap())
-            .collect();
-        assert!(once.iter().eq(interleaved.iter().rev()));
+        let motion = Motion::of(&t).unwrap();
+        let mut redrawn = 0;
+        for seed in 0..100 {
+            let layout = randomize_layout(&t, seed).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            for why in &layout.rejected {
+                let draw = motion.draw(&t.world, &mut rng);
+                assert_eq!(check_layout(&t, &draw).as_ref(), Err(why), "seed {seed}");
+            }
+            assert_eq!(motion.draw(&t.world, &mut rng), layout.world, "seed {seed}");
+            redrawn += usize::from(!layout.rejected.is_empty());
+        }
+        assert!(
+            redrawn > 10,
+            "pick_place redraws some layouts ({redrawn} of 100)"
+        );
     }
 
     #[test]
