@@ -521,7 +521,9 @@ pub enum TaskCommand {
         #[arg(long)]
         json: bool,
     },
-    /// Show a task: its objects, randomization ranges, goals and teaching steps.
+    /// Show a task: its objects, every randomization range and rigid group, the layout rules,
+    /// the fixed relations (groundings no randomized trial can tell apart), its goals, its
+    /// teaching steps and its ground truth.
     Show {
         /// A built-in task name (see `akl task list`) or the path of a task file.
         task: String,

@@ -31,6 +31,7 @@ fn task_show_prints_objects_goals_and_steps() {
     let out = stdout(&o);
     assert!(
         out.contains("scanner_2")
+            && out.contains("scan(part over scanner_1, scanner_2, scanner_3)")
             && out.contains("on(part, shelf_2)")
             && out.contains("straight line"),
         "{out}"
@@ -38,6 +39,96 @@ fn task_show_prints_objects_goals_and_steps() {
     let o = akl(&["task", "show", "assembly", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["akl_task"], 1);
+}
+
+#[test]
+fn task_show_lists_every_range_group_and_fixed_relation() {
+    let o = akl(&["task", "show", "assembly"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let range_row = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("clamp "))
+        .unwrap_or_else(|| panic!("no row for the clamp group: {out}"));
+    assert!(
+        range_row.contains("rail, clamp_left, clamp_right, clamp_top")
+            && range_row.contains("[-0.05, 0.05]")
+            && range_row.contains("[-0.2, 0.2]"),
+        "{range_row}"
+    );
+    for name in ["shelf_1", "shelf_2", "block", "pipe"] {
+        assert!(
+            out.lines()
+                .any(|l| l.trim_start().starts_with(&format!("{name} ")) && l.contains('[')),
+            "no range row for {name}: {out}"
+        );
+    }
+    assert!(out.contains("min_gap"), "{out}");
+    assert!(
+        out.contains(
+            "clamp_left, clamp_right, clamp_top, rail: moved as one body by group `clamp`"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("table, world: not moved"), "{out}");
+    let o = akl(&["task", "show", "assembly", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["groups"]["clamp"].as_array().unwrap().len(), 4);
+    assert_eq!(v["randomize"]["clamp"]["yaw"][1], 0.2);
+    assert_eq!(v["min_gap"], 0.055);
+    assert_eq!(v["goals"][1]["inside"]["holder"], "clamp_top");
+}
+
+/// A task file with a bad value fails with exit code 2 and names the file and the field.
+#[test]
+fn bad_task_file_values_name_the_field_and_exit_2() {
+    let dir = scratch("bad-task");
+    let good = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tasks/inspection.json"
+    ))
+    .unwrap();
+    let cases = [
+        (
+            "height",
+            "\"height\": [0.02, 0.08]",
+            "\"height\": [0.08, 0.02]",
+            "goals[0] (scan).height",
+        ),
+        (
+            "min_gap",
+            "\"min_gap\": 0.055",
+            "\"min_gap\": -1",
+            "min_gap",
+        ),
+        (
+            "group",
+            "[\"scanner_1\", \"scanner_2\", \"scanner_3\"]},",
+            "[\"scanner_1\", \"part\", \"scanner_3\"]},",
+            "groups.scanners[1]",
+        ),
+        (
+            "range",
+            "\"scanners\": {\"x\": [-0.08, 0.08]",
+            "\"scanners\": {\"x\": [0.08, -0.08]",
+            "randomize.scanners.x",
+        ),
+    ];
+    for (name, from, to, field) in cases {
+        let text = good.replacen(from, to, 1);
+        assert_ne!(text, good, "{name}: the edit did not apply");
+        let path = dir.join(format!("{name}.json"));
+        std::fs::write(&path, text).unwrap();
+        let o = akl(&["task", "show", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains(path.to_str().unwrap()) && err.contains(field),
+            "{name}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{name}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

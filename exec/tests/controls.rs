@@ -42,6 +42,12 @@ fn rejected_for(report: &BatchReport, cause: Cause, says: &str) {
         .iter()
         .filter(|r| r.failures.iter().any(|f| f.cause == cause))
         .collect();
+    println!(
+        "{}: {} of {} trials fail for {cause}",
+        report.method,
+        failing.len(),
+        report.trials
+    );
     assert!(
         failing.len() >= 9,
         "only {} of {} trials failed for {cause}: {:?}",

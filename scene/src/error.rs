@@ -46,13 +46,15 @@ pub enum SceneError {
     /// The task's ground-truth spec is invalid.
     #[error("ground truth {0}")]
     Truth(#[from] FileError<SpecError>),
-    /// No placement within the ranges avoided every other object.
-    #[error("randomization: no placement of `{object}` within its ranges avoids the other objects after {attempts} attempts")]
+    /// No layout drawn from the seed was one the task can be done in.
+    #[error("randomization: none of {draws} layouts drawn from seed {seed} is feasible (the last: {last})")]
     Randomize {
-        /// The object that could not be placed.
-        object: String,
-        /// How many placements were tried.
-        attempts: usize,
+        /// The seed.
+        seed: u64,
+        /// How many layouts were drawn.
+        draws: usize,
+        /// Why the last one was rejected.
+        last: String,
     },
 }
 

@@ -9,11 +9,22 @@ use akl_tsr::Pose;
 pub const CONTACT_TOLERANCE: f64 = 1e-3;
 
 /// Whether the oriented bounding boxes of two shapes interpenetrate by more than
-/// [`CONTACT_TOLERANCE`] (separating-axis test over the 15 candidate axes).
+/// [`CONTACT_TOLERANCE`].
 ///
 /// Bounding boxes are exact for boxes and conservative for cylinders and spheres, which is
 /// the safe side for placing objects apart.
 pub fn shapes_overlap(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> bool {
+    penetration(a, pa, b, pb) > CONTACT_TOLERANCE
+}
+
+/// How deep (metres) the oriented bounding boxes of two shapes sink into each other: the
+/// smallest overlap along the 15 candidate separating axes. Negative when they are apart; its
+/// magnitude is then the widest separation along those axes, which never exceeds the true
+/// distance between the boxes.
+///
+/// For boxes the positive value is the exact penetration depth (the separating-axis theorem
+/// over face and edge axes).
+pub fn penetration(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> f64 {
     let ra = pa.rotation.to_rotation_matrix();
     let rb = pb.rotation.to_rotation_matrix();
     let (ha, hb) = (a.half_extents(), b.half_extents());
@@ -21,23 +32,26 @@ pub fn shapes_overlap(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> bool {
     let axes_b: [Vector3<f64>; 3] = [0, 1, 2].map(|i| rb.matrix().column(i).into_owned());
     let t = pb.translation.vector - pa.translation.vector;
 
-    let separated_along = |axis: Vector3<f64>| -> bool {
+    let overlap_along = |axis: Vector3<f64>| -> Option<f64> {
         let n = axis.norm();
         if n < 1e-9 {
-            return false;
+            return None;
         }
         let l = axis / n;
         let radius = |axes: &[Vector3<f64>; 3], h: &Vector3<f64>| {
             (0..3).map(|i| h[i] * axes[i].dot(&l).abs()).sum::<f64>()
         };
-        t.dot(&l).abs() >= radius(&axes_a, &ha) + radius(&axes_b, &hb) - CONTACT_TOLERANCE
+        Some(radius(&axes_a, &ha) + radius(&axes_b, &hb) - t.dot(&l).abs())
     };
 
     let face_axes = axes_a.iter().chain(axes_b.iter()).copied();
     let edge_axes = axes_a
         .iter()
         .flat_map(|u| axes_b.iter().map(move |v| u.cross(v)));
-    !face_axes.chain(edge_axes).any(separated_along)
+    face_axes
+        .chain(edge_axes)
+        .filter_map(overlap_along)
+        .fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]
@@ -82,6 +96,15 @@ mod tests {
             &CUBE,
             &farther
         ));
+    }
+
+    #[test]
+    fn penetration_is_the_depth_or_the_gap() {
+        let origin = pose_from_xyz([0.0; 3]);
+        let d = penetration(&CUBE, &origin, &CUBE, &pose_from_xyz([0.097, 0.0, 0.0]));
+        assert!((d - 0.003).abs() < 1e-12, "{d}");
+        let d = penetration(&CUBE, &origin, &CUBE, &pose_from_xyz([0.13, 0.02, 0.0]));
+        assert!((d + 0.03).abs() < 1e-12, "{d}");
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! Primitive object shapes.
 
-use akl_tsr::nalgebra::Vector3;
+use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use serde::{Deserialize, Serialize};
 
@@ -73,14 +73,47 @@ impl Shape {
     /// Whether the point (in the shape's frame, projected on its x-y plane) lies within the
     /// shape's outline seen from above, shrunk by `margin`.
     pub fn outline_contains(&self, x: f64, y: f64, margin: f64) -> bool {
+        self.outline_excess(x, y) <= -margin
+    }
+
+    /// How far (metres) the point (in the shape's frame, projected on its x-y plane) lies
+    /// outside the shape's outline seen from above; negative inside. For a box it is the
+    /// larger of the two axis excesses, so a box shrunk or grown by `d` on every side has its
+    /// edge where the excess is `-d` or `d`.
+    pub fn outline_excess(&self, x: f64, y: f64) -> f64 {
         match *self {
-            Shape::Box { size } => {
-                x.abs() <= 0.5 * size[0] - margin && y.abs() <= 0.5 * size[1] - margin
-            }
-            Shape::Cylinder { radius, .. } | Shape::Sphere { radius } => {
-                x.hypot(y) <= radius - margin
-            }
+            Shape::Box { size } => (x.abs() - 0.5 * size[0]).max(y.abs() - 0.5 * size[1]),
+            Shape::Cylinder { radius, .. } | Shape::Sphere { radius } => x.hypot(y) - radius,
         }
+    }
+
+    /// The eight corners of the shape's bounding box (in its own frame) placed at `pose`, in
+    /// the world frame.
+    pub fn corners(&self, pose: &Pose) -> [Point3<f64>; 8] {
+        let h = self.half_extents();
+        std::array::from_fn(|i| {
+            let sign = |bit: usize| if i >> bit & 1 == 1 { 1.0 } else { -1.0 };
+            pose * Point3::new(sign(0) * h.x, sign(1) * h.y, sign(2) * h.z)
+        })
+    }
+
+    /// How far (metres) the shape `other` at `other_pose`, seen from above, reaches beyond
+    /// this shape's outline at `pose`: the largest [`Shape::outline_excess`] of the corners of
+    /// `other`'s bounding box. Negative when it lies inside with that much to spare.
+    pub fn overhang(&self, pose: &Pose, other: &Shape, other_pose: &Pose) -> f64 {
+        self.outline_excess_of(pose, &other.corners(other_pose))
+    }
+
+    /// The largest [`Shape::outline_excess`] of world `points` for this shape at `pose`.
+    pub fn outline_excess_of(&self, pose: &Pose, points: &[Point3<f64>]) -> f64 {
+        let to_local = pose.inverse();
+        points
+            .iter()
+            .map(|c| {
+                let local = to_local * c;
+                self.outline_excess(local.x, local.y)
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Checks that every size is finite and positive; the error names the bad value.
@@ -137,6 +170,34 @@ mod tests {
         };
         let h = b.world_half_extents(&pose_from_xyz_rpy([0.0; 3], [0.0, 0.0, FRAC_PI_2]));
         assert!((h.x - 0.05).abs() < 1e-12 && (h.y - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn overhang_measures_how_far_a_footprint_leaves_an_outline() {
+        let shelf = Shape::Box {
+            size: [0.2, 0.2, 0.1],
+        };
+        let block = Shape::Box {
+            size: [0.05, 0.05, 0.05],
+        };
+        let at = |x: f64, yaw: f64| pose_from_xyz_rpy([x, 0.0, 0.075], [0.0, 0.0, yaw]);
+        let origin = pose_from_xyz_rpy([0.0; 3], [0.0; 3]);
+        assert!((shelf.overhang(&origin, &block, &at(0.0, 0.0)) + 0.075).abs() < 1e-12);
+        assert!((shelf.overhang(&origin, &block, &at(0.09, 0.0)) - 0.015).abs() < 1e-12);
+        // Turned 45 degrees, the corner reaches 0.025 * sqrt(2) from the centre.
+        let turned = shelf.overhang(&origin, &block, &at(0.0, std::f64::consts::FRAC_PI_4));
+        assert!(
+            (turned - (0.025 * 2f64.sqrt() - 0.1)).abs() < 1e-12,
+            "{turned}"
+        );
+        let disc = Shape::Cylinder {
+            radius: 0.1,
+            length: 0.1,
+        };
+        assert!(
+            (disc.overhang(&origin, &block, &at(0.0, 0.0)) - (0.025 * 2f64.sqrt() - 0.1)).abs()
+                < 1e-12
+        );
     }
 
     #[test]

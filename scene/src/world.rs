@@ -100,16 +100,6 @@ impl World {
         pairs
     }
 
-    /// Whether `name` at its current pose interpenetrates any other object.
-    pub fn overlaps_any(&self, name: &str) -> Option<&str> {
-        let o = self.object(name)?;
-        self.objects
-            .iter()
-            .filter(|b| b.name != name)
-            .find(|b| shapes_overlap(&o.shape, &o.pose, &b.shape, &b.pose))
-            .map(|b| b.name.as_str())
-    }
-
     /// Checks names, sizes and physical properties; errors name the object.
     pub fn validate(&self) -> Result<(), (String, String)> {
         let mut seen = BTreeSet::new();

@@ -4,7 +4,7 @@ use super::print_json;
 use crate::cli::TaskCommand;
 use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
-use akl_scene::{builtin, Task};
+use akl_scene::{builtin, Motion, Task};
 use akl_tsr::rpy::rpy_from_rotation;
 use serde::Serialize;
 
@@ -73,6 +73,7 @@ fn show(name: &str, json: bool) -> CliResult {
         print!("{}", task.to_json());
         return Ok(());
     }
+    let motion = task.motion().map_err(CliError::input)?;
     println!("{}: {}", task.name, task.description);
     println!(
         "robot base at {}",
@@ -80,22 +81,16 @@ fn show(name: &str, json: bool) -> CliResult {
     );
     println!();
     let mut objects = Table::new([
-        "object",
-        "shape",
-        "position",
-        "yaw",
-        "movable",
-        "mass",
-        "randomized (dx, dy, dyaw)",
+        "object", "shape", "position", "yaw", "movable", "mass", "moved by", "rides on",
     ]);
     for o in &task.world.objects {
         let yaw = rpy_from_rotation(&o.pose.rotation)[2];
-        let range = task.randomize.get(&o.name).map_or("-".into(), |r| {
-            format!(
-                "[{}, {}] [{}, {}] [{}, {}]",
-                r.x[0], r.x[1], r.y[0], r.y[1], r.yaw[0], r.yaw[1]
-            )
-        });
+        let mover = motion.mover_of(&o.name);
+        let moved_by = match mover {
+            Some(m) if m.range.is_some() && m.group => format!("group {}", m.name),
+            Some(m) if m.range.is_some() => "own range".into(),
+            _ => "-".into(),
+        };
         objects.row(vec![
             o.name.clone(),
             o.shape.describe(),
@@ -107,10 +102,13 @@ fn show(name: &str, json: bool) -> CliResult {
             } else {
                 "-".into()
             },
-            range,
+            moved_by,
+            motion.carrier_of(&o.name).unwrap_or("-").to_string(),
         ]);
     }
     print!("{}", objects.render());
+    println!();
+    print_randomization(&task, &motion)?;
     println!();
     println!("goals:");
     for g in &task.goals {
@@ -133,6 +131,38 @@ fn show(name: &str, json: bool) -> CliResult {
                 kf.kind, kf.reference, kf.gripper, kf.constraint
             );
         }
+    }
+    Ok(())
+}
+
+/// The ranges (with what each moves and what carries it), the layout rules and the fixed
+/// relations of `task`.
+fn print_randomization(task: &Task, motion: &Motion) -> CliResult {
+    println!(
+        "randomization (offsets along the axes of what carries each; turns about its centre):"
+    );
+    let mut ranges = Table::new(["  range", "moves", "rides on", "x", "y", "yaw"]);
+    for m in motion.movers.iter() {
+        let Some(r) = m.range else { continue };
+        let interval = |[lo, hi]: [f64; 2]| format!("[{lo}, {hi}]");
+        ranges.row(vec![
+            format!("  {}", m.name),
+            m.members.join(", "),
+            m.carrier
+                .map_or("-".into(), |c| motion.movers[c].name.clone()),
+            interval(r.x),
+            interval(r.y),
+            interval(r.yaw),
+        ]);
+    }
+    print!("{}", ranges.render());
+    println!(
+        "  layouts keep movable objects {} m apart (min_gap), on their supports, and the teaching's targets within {} m of the shoulder at {:?} and {} m from the base's axis",
+        task.min_gap, task.reach.max, task.reach.shoulder, task.reach.min_radial
+    );
+    println!("fixed relations (equivalent groundings):");
+    for r in task.fixed_relations().map_err(CliError::input)? {
+        println!("  {}: {}", r.members.join(", "), r.because);
     }
     Ok(())
 }

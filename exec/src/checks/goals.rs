@@ -1,5 +1,5 @@
-//! Goal check: the task's goal predicates on the settled world, and every movable object at
-//! rest once settled.
+//! Goal check: the task's goal predicates on the settled world and the objects' simulated
+//! paths, and every movable object at rest once settled.
 
 use super::failure;
 use crate::report::{Cause, Failure};
@@ -9,11 +9,7 @@ use akl_scene::{GoalCheck, Task};
 /// The goal checks, and a failure for each that does not hold.
 pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck>, Vec<Failure>) {
     let mut goals: Vec<GoalCheck> = match &obs.settled {
-        Some(world) => task
-            .goals
-            .iter()
-            .map(|g| g.check(world, &task.world))
-            .collect(),
+        Some(world) => task.check_goals(world, &obs.paths),
         None => Vec::new(),
     };
     goals.push(rest(&obs.speeds, rest_speed));

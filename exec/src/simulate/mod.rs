@@ -122,10 +122,7 @@ pub fn simulate(
         }
         if step % path_every == 0 {
             for (i, o) in sim.objects.iter().enumerate().filter(|(_, o)| o.movable) {
-                obs.paths
-                    .entry(o.name.clone())
-                    .or_default()
-                    .push((t, sim.object_pose(i)));
+                obs.paths.push(&o.name, t, sim.object_pose(i));
             }
         }
         if let Some(tl) = timeline.as_deref_mut() {

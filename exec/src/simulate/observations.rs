@@ -2,10 +2,9 @@
 
 use crate::contacts::ContactLog;
 use crate::grasp::GraspMeasure;
-use akl_scene::World;
+use akl_scene::{ObjectPaths, World};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
-use std::collections::BTreeMap;
 
 /// The simulated TCP and the reference object when the plan reaches a keyframe.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,9 +72,6 @@ pub struct ReleaseEvent {
     pub bottom_at_rest: Option<f64>,
 }
 
-/// Timed poses of one object.
-pub type Path = Vec<(f64, Pose)>;
-
 /// Everything one run measured.
 #[derive(Debug, Clone, Default)]
 pub struct Observations {
@@ -95,8 +91,8 @@ pub struct Observations {
     pub tracking_max: f64,
     /// Root mean square of that distance over the plan (metres).
     pub tracking_rms: f64,
-    /// Every movable object's path, sampled at the trace rate.
-    pub paths: BTreeMap<String, Path>,
+    /// Every movable object's path, sampled at [`crate::trial::ExecOptions::path_rate`].
+    pub paths: ObjectPaths,
     /// The world after settling.
     pub settled: Option<World>,
     /// Linear and angular speed of every movable object after settling.

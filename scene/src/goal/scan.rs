@@ -1,0 +1,386 @@
+//! The `scan` goal: an object carried over a row of scanners in a straight line, judged on
+//! the path the object took.
+
+use super::find;
+use crate::paths::{ObjectPaths, PathSample};
+use crate::world::{Object, World};
+use akl_tsr::nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use akl_tsr::Pose;
+
+/// Spacing (metres) at which a path is filled in between its samples, so that passing over a
+/// scanner is seen whatever rate the path was sampled at: a fifth of the 5 mm straightness
+/// tolerance, and far below any scanner's size.
+const FILL_STEP: f64 = 1e-3;
+
+/// The parameters of a `scan` goal.
+pub(super) struct Scan<'a> {
+    pub object: &'a str,
+    pub scanners: &'a [String],
+    pub height: [f64; 2],
+    pub max_deviation: f64,
+}
+
+/// Checks the values of a `scan` goal; the error names the field.
+pub(super) fn validate(
+    object: &str,
+    scanners: &[String],
+    [lo, hi]: [f64; 2],
+    max_deviation: f64,
+) -> Result<(), (String, String)> {
+    let field = |f: &str, p: String| Err((f.to_string(), p));
+    if scanners.is_empty() {
+        return field("scanners", "lists no scanner".into());
+    }
+    for (i, s) in scanners.iter().enumerate() {
+        if s == object {
+            return field("scanners", format!("`{s}` cannot pass over itself"));
+        }
+        if scanners[..i].contains(s) {
+            return field("scanners", format!("names `{s}` twice"));
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() || lo < 0.0 || lo >= hi {
+        return field(
+            "height",
+            format!("must be finite with 0 <= min < max, got [{lo}, {hi}]"),
+        );
+    }
+    if !max_deviation.is_finite() || max_deviation <= 0.0 {
+        return field(
+            "max_deviation",
+            format!("must be finite and > 0, got {max_deviation}"),
+        );
+    }
+    Ok(())
+}
+
+/// What the path showed about one scanner.
+#[derive(Clone, Copy)]
+struct Seen {
+    /// Whether the object passed entirely over it at scan height.
+    crossed: bool,
+    /// The least the object's centre was outside the scanner's outline (metres).
+    centre_closest: f64,
+    /// While its centre was over the scanner, the least its outline reached beyond the
+    /// scanner's (metres; <= 0: entirely over it).
+    closest: f64,
+    /// While entirely over it, the height above its top nearest to the scan band.
+    height_over: Option<f64>,
+}
+
+/// Evaluates a `scan` goal on the object's path in `paths`, with the scanners where `end`
+/// has them (furniture does not move during an execution).
+pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<String, String> {
+    let object = scan.object;
+    let part = find(end, object)?;
+    let scanners = scan
+        .scanners
+        .iter()
+        .map(|s| find(end, s))
+        .collect::<Result<Vec<&Object>, String>>()?;
+    let path = filled(paths.path(object));
+    if path.is_empty() {
+        return Err(format!("no path of {object} was recorded"));
+    }
+    let [lo, hi] = scan.height;
+    let distance_to_band = |h: f64| (lo - h).max(h - hi).max(0.0);
+    let mut seen = vec![
+        Seen {
+            crossed: false,
+            centre_closest: f64::INFINITY,
+            closest: f64::INFINITY,
+            height_over: None,
+        };
+        scanners.len()
+    ];
+    let mut pass: Option<(usize, usize)> = None;
+    for (i, pose) in path.iter().enumerate() {
+        // The outline's corners are only needed while the centre is over a scanner (the
+        // largest corner excess is never below the centre's, the excess being convex).
+        let mut corners = None;
+        for (s, seen) in scanners.iter().zip(seen.iter_mut()) {
+            let centre = s
+                .shape
+                .outline_excess_of(&s.pose, &[pose.translation.vector.into()]);
+            seen.centre_closest = seen.centre_closest.min(centre);
+            if centre > 0.0 {
+                continue;
+            }
+            let corners = corners.get_or_insert_with(|| part.shape.corners(pose));
+            let beyond = s.shape.outline_excess_of(&s.pose, corners.as_slice());
+            seen.closest = seen.closest.min(beyond);
+            if beyond > 0.0 {
+                continue;
+            }
+            let h = part.shape.bottom(pose) - s.shape.top(&s.pose);
+            if seen
+                .height_over
+                .is_none_or(|best| distance_to_band(h) < distance_to_band(best))
+            {
+                seen.height_over = Some(h);
+            }
+            if (lo..=hi).contains(&h) {
+                seen.crossed = true;
+                pass = Some(pass.map_or((i, i), |(first, _)| (first, i)));
+            }
+        }
+    }
+    for (s, seen) in scanners.iter().zip(&seen) {
+        if seen.crossed {
+            continue;
+        }
+        return Err(match seen.height_over {
+            Some(h) => format!(
+                "{object} passed over {} only {h:.3} m above it (scan height {lo}–{hi} m)",
+                s.name
+            ),
+            None if seen.closest.is_finite() => format!(
+                "{object} never passed entirely over {}: at best it reached {:.1} mm beyond its outline",
+                s.name,
+                seen.closest * 1e3
+            ),
+            None => format!(
+                "{object} never passed over {}: its centre stayed at least {:.1} mm outside its outline",
+                s.name,
+                seen.centre_closest * 1e3
+            ),
+        });
+    }
+    let Some((first, last)) = pass else {
+        return Err(format!("{object} passed over no scanner"));
+    };
+    let over_row: Vec<Vector3<f64>> = path[first..=last]
+        .iter()
+        .map(|p| p.translation.vector)
+        .collect();
+    let deviation = deviation_from_line(&over_row);
+    let length = (over_row[over_row.len() - 1] - over_row[0]).norm();
+    if deviation > scan.max_deviation {
+        return Err(format!(
+            "{object}'s path over the row leaves a straight line by {:.1} mm (at most {:.1} mm allowed)",
+            deviation * 1e3,
+            scan.max_deviation * 1e3
+        ));
+    }
+    Ok(format!(
+        "passed over {} scanners; path over the row {:.1} mm from straight over {length:.3} m",
+        scanners.len(),
+        deviation * 1e3
+    ))
+}
+
+/// The path's poses with poses interpolated between samples at most [`FILL_STEP`] apart.
+fn filled(samples: &[PathSample]) -> Vec<Pose> {
+    let mut poses = Vec::with_capacity(samples.len());
+    if let Some(first) = samples.first() {
+        poses.push(first.pose);
+    }
+    for pair in samples.windows(2) {
+        let (a, b) = (&pair[0].pose, &pair[1].pose);
+        let length = (b.translation.vector - a.translation.vector).norm();
+        let steps = (length / FILL_STEP).ceil().max(1.0) as usize;
+        for k in 1..=steps {
+            let s = k as f64 / steps as f64;
+            let mut pose = *b;
+            pose.translation.vector = a.translation.vector.lerp(&b.translation.vector, s);
+            pose.rotation = a
+                .rotation
+                .try_slerp(&b.rotation, s, 1e-9)
+                .unwrap_or(if s < 0.5 { a.rotation } else { b.rotation });
+            poses.push(pose);
+        }
+    }
+    poses
+}
+
+/// The largest distance of `points` from their least-squares line (the line through their
+/// centroid along their principal direction). An upper bound on how far they are from the
+/// best straight line; zero for fewer than two distinct points.
+fn deviation_from_line(points: &[Vector3<f64>]) -> f64 {
+    if points.len() < 2 {
+        return 0.0;
+    }
+    let centroid = points.iter().sum::<Vector3<f64>>() / points.len() as f64;
+    let scatter: Matrix3<f64> = points
+        .iter()
+        .map(|p| (p - centroid) * (p - centroid).transpose())
+        .sum();
+    let eigen = SymmetricEigen::new(scatter);
+    let direction: Vector3<f64> = eigen.eigenvectors.column(eigen.eigenvalues.imax()).into();
+    points
+        .iter()
+        .map(|p| {
+            let d = p - centroid;
+            (d - direction * d.dot(&direction)).norm()
+        })
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin;
+    use crate::Task;
+    use akl_tsr::pose::pose_from_xyz;
+
+    fn task() -> Task {
+        builtin::task("inspection").unwrap().unwrap()
+    }
+
+    /// A path of the part through `points` (world positions of its centre), upright, sampled
+    /// every `step` metres along straight pieces between them.
+    fn path_through(points: &[[f64; 3]], step: f64) -> ObjectPaths {
+        let mut paths = ObjectPaths::new();
+        let mut t = 0.0;
+        for pair in points.windows(2) {
+            let (a, b) = (Vector3::from(pair[0]), Vector3::from(pair[1]));
+            let n = ((b - a).norm() / step).ceil().max(1.0) as usize;
+            for k in 0..n {
+                let p = a.lerp(&b, k as f64 / n as f64);
+                paths.push("part", t, pose_from_xyz([p.x, p.y, p.z]));
+                t += 0.01;
+            }
+        }
+        let last = points[points.len() - 1];
+        paths.push("part", t, pose_from_xyz(last));
+        paths
+    }
+
+    fn scan_goal(t: &Task) -> &crate::Goal {
+        t.goals
+            .iter()
+            .find(|g| g.kind() == "scan")
+            .expect("inspection has a scan goal")
+    }
+
+    /// The part's centre 5 cm above the scanners' tops (its bottom at 0.15 m), along x = 0.55.
+    const START: [f64; 3] = [0.45, 0.32, 0.19];
+    const END: [f64; 3] = [0.45, -0.36, 0.19];
+
+    #[test]
+    fn a_straight_pass_at_scan_height_holds_at_any_sampling_rate() {
+        let t = task();
+        for step in [0.001, 0.03, 0.2] {
+            let paths = path_through(&[START, [0.55, 0.18, 0.2], [0.55, -0.18, 0.2], END], step);
+            let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+            assert!(c.holds, "step {step}: {}", c.detail);
+        }
+    }
+
+    #[test]
+    fn skipping_the_scanners_fails() {
+        let t = task();
+        let paths = path_through(&[START, [0.4, 0.0, 0.25], END], 0.005);
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(
+            !c.holds
+                && c.detail
+                    .contains("never passed over scanner_1: its centre stayed"),
+            "{}",
+            c.detail
+        );
+    }
+
+    #[test]
+    fn passing_too_high_fails_for_its_height() {
+        let t = task();
+        let paths = path_through(
+            &[START, [0.55, 0.18, 0.35], [0.55, -0.18, 0.35], END],
+            0.005,
+        );
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(
+            !c.holds && c.detail.contains("only 0.200 m above"),
+            "{}",
+            c.detail
+        );
+    }
+
+    #[test]
+    fn passing_beside_a_scanner_fails() {
+        let t = task();
+        // 2 cm off the row's centre line: the 5 cm part sticks out of the 8 cm scanners.
+        let paths = path_through(&[START, [0.57, 0.18, 0.2], [0.57, -0.18, 0.2], END], 0.005);
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(
+            !c.holds && c.detail.contains("5.0 mm beyond"),
+            "{}",
+            c.detail
+        );
+    }
+
+    #[test]
+    fn a_bent_path_over_the_row_fails_for_its_deviation() {
+        let t = task();
+        let row = |via: &[[f64; 3]]| {
+            let mut points = vec![START, [0.55, 0.18, 0.2]];
+            points.extend_from_slice(via);
+            points.extend_from_slice(&[[0.55, -0.18, 0.2], END]);
+            path_through(&points, 0.005)
+        };
+        // Entirely over every scanner at scan height, but zigzagging 1.2 cm to either side.
+        let weaving = row(&[[0.562, 0.1, 0.2], [0.538, 0.0, 0.2], [0.562, -0.1, 0.2]]);
+        // Dipping 3 cm over the middle scanner (still 2 cm above it).
+        let dipping = row(&[[0.55, 0.0, 0.17]]);
+        for paths in [weaving, dipping] {
+            let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+            assert!(
+                !c.holds && c.detail.contains("leaves a straight line"),
+                "{}",
+                c.detail
+            );
+        }
+        // A straight pass slanted across the row is straight; a 2 mm kink is within the 5 mm
+        // tolerance.
+        let slanted = row(&[[0.562, 0.1, 0.2], [0.538, -0.1, 0.2]]);
+        let c = scan_goal(&t).check(&t.world, &slanted, &t.world);
+        assert!(c.holds, "{}", c.detail);
+        let kinked = row(&[[0.552, 0.0, 0.2]]);
+        let c = scan_goal(&t).check(&t.world, &kinked, &t.world);
+        assert!(c.holds, "{}", c.detail);
+    }
+
+    #[test]
+    fn no_recorded_path_fails() {
+        let t = task();
+        let c = scan_goal(&t).check(&t.world, &ObjectPaths::new(), &t.world);
+        assert!(!c.holds && c.detail.contains("no path"), "{}", c.detail);
+    }
+
+    #[test]
+    fn scan_values_are_checked_by_field() {
+        let s = ["scanner_1".to_string()];
+        assert_eq!(
+            validate("part", &s, [0.05, 0.02], 0.005).unwrap_err().0,
+            "height"
+        );
+        assert_eq!(
+            validate("part", &s, [0.0, 0.02], 0.0).unwrap_err().0,
+            "max_deviation"
+        );
+        assert_eq!(
+            validate("part", &[], [0.0, 0.02], 0.005).unwrap_err().0,
+            "scanners"
+        );
+        let twice = ["scanner_1".to_string(), "scanner_1".to_string()];
+        assert!(validate("part", &twice, [0.0, 0.02], 0.005)
+            .unwrap_err()
+            .1
+            .contains("twice"));
+    }
+
+    #[test]
+    fn a_straight_line_has_no_deviation_and_a_kink_has_its_own() {
+        let line: Vec<Vector3<f64>> = (0..10)
+            .map(|i| Vector3::new(0.1 * i as f64, 0.05 * i as f64, 0.0))
+            .collect();
+        assert!(deviation_from_line(&line) < 1e-12);
+        let kink = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(0.5, 0.01, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+        ];
+        let d = deviation_from_line(&kink);
+        assert!(d > 0.005 && d < 0.01, "{d}");
+    }
+}
