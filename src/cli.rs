@@ -275,6 +275,14 @@ pub struct ExecuteArgs {
     /// candidate, the nominal-first plan.
     #[arg(long, value_name = "MS", default_value_t = 0)]
     pub budget: u64,
+    /// Instead of executing the spec, re-ground each keyframe on every other object (and the
+    /// world), its offset recomputed so its nominal pose is unchanged, and execute each such
+    /// spec in randomized trials (--randomize N per alternative, default 10): prints, per
+    /// keyframe, which references the task's randomization tells apart from the spec's (at
+    /// least 90 % of trials fail), which are equivalent (held in a fixed relation by the task
+    /// or by an earlier placement) and which it cannot tell apart.
+    #[arg(long, conflicts_with_all = ["trace", "report"])]
+    pub grounding_check: bool,
     /// Which trial `--trace` writes (default: the first that failed, else the first).
     #[arg(long, value_name = "N", requires = "trace")]
     pub trace_trial: Option<usize>,

@@ -54,6 +54,18 @@ impl Progress {
         }
     }
 
+    /// Sets the count of trials done (none failed) and redraws the bar.
+    pub fn set(&self, done: usize) {
+        let mut counts = match self.counts.lock() {
+            Ok(c) => c,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        counts.done = done;
+        if self.shown {
+            self.draw(&counts);
+        }
+    }
+
     /// Erases the bar, leaving the line for what is printed next.
     pub fn finish(&self) {
         if self.shown {

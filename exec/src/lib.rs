@@ -8,6 +8,7 @@ pub mod contacts;
 pub mod convert;
 pub mod error;
 pub mod grasp;
+pub mod grounding;
 pub mod hand;
 pub mod perception;
 pub mod report;

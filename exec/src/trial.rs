@@ -59,7 +59,7 @@ impl Default for ExecOptions {
             drop_limit: 0.02,
             settle: 0.5,
             rest_speed: 0.01,
-            path_rate: 60.0,
+            path_rate: 240.0,
         }
     }
 }

@@ -250,3 +250,23 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
         nominal.contacts.collisions()
     );
 }
+
+/// Inspection with no pass over the scanners (grasp, then straight to the shelf): the part
+/// never crosses the row.
+#[test]
+fn inspection_without_the_scan_fails_its_goal() {
+    let t = task("inspection");
+    let mut wrong = t.truth.clone().unwrap();
+    wrong.keyframes.drain(1..3);
+    rejected_for(&run(&t, &wrong), Cause::GoalNotMet, "scan(part");
+}
+
+/// Inspection with the scan's `move_in_line` removed: the part is carried between the line's
+/// ends by a free motion, which does not pass over the row in a straight line.
+#[test]
+fn inspection_without_its_line_fails_its_goal() {
+    let t = task("inspection");
+    let mut wrong = t.truth.clone().unwrap();
+    wrong.keyframes[2].constraint = akl_tsr::Constraint::None;
+    rejected_for(&run(&t, &wrong), Cause::GoalNotMet, "scan(part");
+}

@@ -8,6 +8,7 @@ use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::error::ExecError;
+use akl_exec::grounding::GroundingOptions;
 use akl_exec::perception::PoseNoise;
 use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
@@ -67,6 +68,32 @@ pub fn run(args: ExecuteArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
     let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
+    let options = ExecOptions {
+        plan: PlanOptions {
+            budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
+            ..PlanOptions::default()
+        },
+        noise: PoseNoise {
+            position: args.pose_noise.millimetres * 1e-3,
+            yaw: args.pose_noise.degrees.to_radians(),
+        },
+        ..ExecOptions::default()
+    };
+    if args.grounding_check {
+        let grounding = GroundingOptions {
+            trials: match args.randomize {
+                Some(0) => return Err(CliError::input("--randomize: needs at least one trial")),
+                Some(n) => n,
+                None => GroundingOptions::default().trials,
+            },
+            seed: args.seed,
+            jobs: jobs(args.jobs)?,
+            ..GroundingOptions::default()
+        };
+        return super::grounding::run(
+            &robot, &task, &spec, &args.spec, &options, &grounding, args.json,
+        );
+    }
     let executed = execute(&Execution {
         robot: &robot,
         task: &task,
@@ -77,17 +104,7 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         jobs: args.jobs,
         trace: args.trace.as_deref(),
         trace_trial: args.trace_trial,
-        options: ExecOptions {
-            plan: PlanOptions {
-                budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
-                ..PlanOptions::default()
-            },
-            noise: PoseNoise {
-                position: args.pose_noise.millimetres * 1e-3,
-                yaw: args.pose_noise.degrees.to_radians(),
-            },
-            ..ExecOptions::default()
-        },
+        options,
         report: args.report.as_deref(),
     })?;
     if args.json {
@@ -97,6 +114,15 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         print_outputs(&executed);
     }
     verdict(&executed.report)
+}
+
+/// The worker threads `--jobs` asks for (default: the number of cores).
+fn jobs(asked: Option<usize>) -> Result<usize, CliError> {
+    match asked {
+        Some(0) => Err(CliError::input("--jobs: needs at least one")),
+        Some(j) => Ok(j),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
 }
 
 /// Exit code 1 when some trial failed.
@@ -125,11 +151,7 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
         Some(n) => n,
         None => 1,
     };
-    let jobs = match e.jobs {
-        Some(0) => return Err(CliError::input("--jobs: needs at least one")),
-        Some(j) => j,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(e.jobs)?;
     let options = BatchOptions {
         trials,
         randomize: e.randomize.is_some(),

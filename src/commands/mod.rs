@@ -5,6 +5,7 @@ mod demo;
 mod eval;
 mod execute;
 mod flexibility;
+mod grounding;
 mod learn;
 mod plan;
 mod robot;

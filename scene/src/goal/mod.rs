@@ -29,6 +29,11 @@ fn default_depth() -> f64 {
 fn default_deviation() -> f64 {
     0.005
 }
+/// 0.05 rad (3°): a line grounded on the row runs along it to within the 5 mm of its keyframes'
+/// bounds over its length (under 2° over the 36 cm of the built-in scan).
+fn default_row_angle() -> f64 {
+    0.05
+}
 
 /// A condition on the end of an execution; written `{"on": {...}}`, `{"scan": {...}}` etc. in
 /// task files (see `tasks/README.md`).
@@ -63,7 +68,8 @@ pub enum Goal {
     /// execution it passed entirely over every scanner (its outline seen from above inside the
     /// scanner's) with its bottom between `height[0]` and `height[1]` above the scanner's top,
     /// and its path from the first such moment to the last stayed within `max_deviation` of a
-    /// straight line.
+    /// straight line which, seen from above, runs along the row (within `max_angle` of the line
+    /// through the first and last scanners' centres), as a row of scanners scans.
     Scan {
         /// The object scanned.
         object: String,
@@ -75,6 +81,9 @@ pub enum Goal {
         /// How far (metres) the object's path over the row may leave a straight line.
         #[serde(default = "default_deviation")]
         max_deviation: f64,
+        /// How far (radians) that line may turn from the row's axis, seen from above.
+        #[serde(default = "default_row_angle")]
+        max_angle: f64,
     },
     /// `object` (a cylinder or box, its axis the frame's z axis) lies inside `holder`: the
     /// holder's axis, the segment `axis` given in the holder's frame, is covered by the
@@ -195,8 +204,9 @@ impl Goal {
                 scanners,
                 height,
                 max_deviation,
+                max_angle,
                 object,
-            } => scan::validate(object, scanners, *height, *max_deviation),
+            } => scan::validate(object, scanners, *height, *max_deviation, *max_angle),
             Goal::Inside {
                 object,
                 axis,
@@ -248,6 +258,7 @@ impl Goal {
                 scanners,
                 height,
                 max_deviation,
+                max_angle,
             } => scan::evaluate(
                 end,
                 paths,
@@ -256,6 +267,7 @@ impl Goal {
                     scanners,
                     height: *height,
                     max_deviation: *max_deviation,
+                    max_angle: *max_angle,
                 },
             ),
             Goal::Inside {

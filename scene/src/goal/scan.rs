@@ -18,6 +18,7 @@ pub(super) struct Scan<'a> {
     pub scanners: &'a [String],
     pub height: [f64; 2],
     pub max_deviation: f64,
+    pub max_angle: f64,
 }
 
 /// Checks the values of a `scan` goal; the error names the field.
@@ -26,6 +27,7 @@ pub(super) fn validate(
     scanners: &[String],
     [lo, hi]: [f64; 2],
     max_deviation: f64,
+    max_angle: f64,
 ) -> Result<(), (String, String)> {
     let field = |f: &str, p: String| Err((f.to_string(), p));
     if scanners.is_empty() {
@@ -49,6 +51,12 @@ pub(super) fn validate(
         return field(
             "max_deviation",
             format!("must be finite and > 0, got {max_deviation}"),
+        );
+    }
+    if !max_angle.is_finite() || max_angle <= 0.0 || max_angle > std::f64::consts::FRAC_PI_2 {
+        return field(
+            "max_angle",
+            format!("must be in (0, π/2] radians, got {max_angle}"),
         );
     }
     Ok(())
@@ -153,7 +161,7 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
         .iter()
         .map(|p| p.translation.vector)
         .collect();
-    let deviation = deviation_from_line(&over_row);
+    let (deviation, direction) = fit_line(&over_row);
     let length = (over_row[over_row.len() - 1] - over_row[0]).norm();
     if deviation > scan.max_deviation {
         return Err(format!(
@@ -162,10 +170,19 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
             scan.max_deviation * 1e3
         ));
     }
+    let angle = angle_to_row(&direction, &scanners);
+    if angle > scan.max_angle {
+        return Err(format!(
+            "{object}'s path over the row runs {:.1}° off the row's axis (at most {:.1}° allowed)",
+            angle.to_degrees(),
+            scan.max_angle.to_degrees()
+        ));
+    }
     Ok(format!(
-        "passed over {} scanners; path over the row {:.1} mm from straight over {length:.3} m",
+        "passed over {} scanners; path over the row {:.1} mm from straight over {length:.3} m, {:.1}° off the row",
         scanners.len(),
-        deviation * 1e3
+        deviation * 1e3,
+        angle.to_degrees()
     ))
 }
 
@@ -194,11 +211,11 @@ fn filled(samples: &[PathSample]) -> Vec<Pose> {
 }
 
 /// The largest distance of `points` from their least-squares line (the line through their
-/// centroid along their principal direction). An upper bound on how far they are from the
-/// best straight line; zero for fewer than two distinct points.
-fn deviation_from_line(points: &[Vector3<f64>]) -> f64 {
+/// centroid along their principal direction), and that direction. The distance is an upper
+/// bound on how far they are from the best straight line; zero for fewer than two points.
+fn fit_line(points: &[Vector3<f64>]) -> (f64, Vector3<f64>) {
     if points.len() < 2 {
-        return 0.0;
+        return (0.0, Vector3::zeros());
     }
     let centroid = points.iter().sum::<Vector3<f64>>() / points.len() as f64;
     let scatter: Matrix3<f64> = points
@@ -207,13 +224,28 @@ fn deviation_from_line(points: &[Vector3<f64>]) -> f64 {
         .sum();
     let eigen = SymmetricEigen::new(scatter);
     let direction: Vector3<f64> = eigen.eigenvectors.column(eigen.eigenvalues.imax()).into();
-    points
+    let deviation = points
         .iter()
         .map(|p| {
             let d = p - centroid;
             (d - direction * d.dot(&direction)).norm()
         })
-        .fold(0.0, f64::max)
+        .fold(0.0, f64::max);
+    (deviation, direction)
+}
+
+/// The angle (radians) between `direction` and the row's axis (from the first scanner's centre
+/// to the last's), both seen from above; 0 for a row of one scanner.
+fn angle_to_row(direction: &Vector3<f64>, scanners: &[&Object]) -> f64 {
+    let (Some(first), Some(last)) = (scanners.first(), scanners.last()) else {
+        return 0.0;
+    };
+    let flat = |v: Vector3<f64>| Vector3::new(v.x, v.y, 0.0).try_normalize(1e-12);
+    let row = flat(last.pose.translation.vector - first.pose.translation.vector);
+    match (row, flat(*direction)) {
+        (Some(row), Some(path)) => row.dot(&path).abs().clamp(0.0, 1.0).acos(),
+        _ => 0.0,
+    }
 }
 
 #[cfg(test)]
@@ -330,13 +362,27 @@ mod tests {
                 c.detail
             );
         }
-        // A straight pass slanted across the row is straight; a 2 mm kink is within the 5 mm
-        // tolerance.
-        let slanted = row(&[[0.562, 0.1, 0.2], [0.538, -0.1, 0.2]]);
-        let c = scan_goal(&t).check(&t.world, &slanted, &t.world);
-        assert!(c.holds, "{}", c.detail);
+        // A 2 mm kink is within the 5 mm tolerance.
         let kinked = row(&[[0.552, 0.0, 0.2]]);
         let c = scan_goal(&t).check(&t.world, &kinked, &t.world);
+        assert!(c.holds, "{}", c.detail);
+    }
+
+    #[test]
+    fn a_straight_pass_slanted_across_the_row_fails_for_its_angle() {
+        let t = task();
+        let pass = |from: [f64; 3], to: [f64; 3]| path_through(&[START, from, to, END], 0.005);
+        // Entirely over every scanner, straight, but 7° across the row.
+        let slanted = pass([0.562, 0.2, 0.2], [0.538, -0.2, 0.2]);
+        let c = scan_goal(&t).check(&t.world, &slanted, &t.world);
+        assert!(
+            !c.holds && c.detail.contains("off the row's axis"),
+            "{}",
+            c.detail
+        );
+        // 1.7° across it is along the row.
+        let nearly = pass([0.556, 0.2, 0.2], [0.544, -0.2, 0.2]);
+        let c = scan_goal(&t).check(&t.world, &nearly, &t.world);
         assert!(c.holds, "{}", c.detail);
     }
 
@@ -351,19 +397,27 @@ mod tests {
     fn scan_values_are_checked_by_field() {
         let s = ["scanner_1".to_string()];
         assert_eq!(
-            validate("part", &s, [0.05, 0.02], 0.005).unwrap_err().0,
+            validate("part", &s, [0.05, 0.02], 0.005, 0.05)
+                .unwrap_err()
+                .0,
             "height"
         );
         assert_eq!(
-            validate("part", &s, [0.0, 0.02], 0.0).unwrap_err().0,
+            validate("part", &s, [0.0, 0.02], 0.0, 0.05).unwrap_err().0,
             "max_deviation"
         );
         assert_eq!(
-            validate("part", &[], [0.0, 0.02], 0.005).unwrap_err().0,
+            validate("part", &s, [0.0, 0.02], 0.005, 2.0).unwrap_err().0,
+            "max_angle"
+        );
+        assert_eq!(
+            validate("part", &[], [0.0, 0.02], 0.005, 0.05)
+                .unwrap_err()
+                .0,
             "scanners"
         );
         let twice = ["scanner_1".to_string(), "scanner_1".to_string()];
-        assert!(validate("part", &twice, [0.0, 0.02], 0.005)
+        assert!(validate("part", &twice, [0.0, 0.02], 0.005, 0.05)
             .unwrap_err()
             .1
             .contains("twice"));
@@ -374,13 +428,13 @@ mod tests {
         let line: Vec<Vector3<f64>> = (0..10)
             .map(|i| Vector3::new(0.1 * i as f64, 0.05 * i as f64, 0.0))
             .collect();
-        assert!(deviation_from_line(&line) < 1e-12);
+        assert!(fit_line(&line).0 < 1e-12);
         let kink = [
             Vector3::new(0.0, 0.0, 0.0),
             Vector3::new(0.5, 0.01, 0.0),
             Vector3::new(1.0, 0.0, 0.0),
         ];
-        let d = deviation_from_line(&kink);
+        let d = fit_line(&kink).0;
         assert!(d > 0.005 && d < 0.01, "{d}");
     }
 }
