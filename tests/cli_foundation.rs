@@ -52,7 +52,7 @@ fn task_show_lists_every_range_group_and_fixed_relation() {
         .unwrap_or_else(|| panic!("no row for the clamp group: {out}"));
     assert!(
         range_row.contains("rail, clamp_left, clamp_right, clamp_top")
-            && range_row.contains("[-0.05, 0.05]")
+            && range_row.contains("[-0.06, 0.06]")
             && range_row.contains("[-0.2, 0.2]"),
         "{range_row}"
     );

@@ -163,10 +163,10 @@ fn a_grasp_of_the_wrong_object_fails() {
     assert!(refused >= 9, "{refused} refused: {:?}", report.failures);
 }
 
-/// The scan line without its constraint, with motors too weak to follow the plan: the
-/// simulated TCP lags, and the keyframes and lines measured on it fail.
+/// Motors too weak to follow the plan: the simulated TCP lags, and the keyframes and lines
+/// measured on it fail (the checks read the simulated arm, not the plan).
 #[test]
-fn motors_too_weak_to_track_miss_the_line() {
+fn motors_too_weak_to_track_miss_keyframes_and_lines() {
     let t = task("inspection");
     let weak = ExecOptions {
         drives: Drives {
@@ -176,11 +176,27 @@ fn motors_too_weak_to_track_miss_the_line() {
         ..ExecOptions::default()
     };
     let report = run_with(&t, t.truth.as_ref().unwrap(), &weak);
-    rejected_for(&report, Cause::LineDeviation, "strays");
+    let lagging = report
+        .reports
+        .iter()
+        .filter(|r| {
+            r.failures
+                .iter()
+                .any(|f| matches!(f.cause, Cause::LineDeviation | Cause::KeyframeMissed))
+        })
+        .count();
+    assert!(lagging >= 9, "{lagging}: {:?}", report.failures);
+    let strays =
+        report.reports.iter().flat_map(|r| &r.failures).any(|f| {
+            f.cause == Cause::LineDeviation && f.detail.contains("the simulated TCP strays")
+        });
+    assert!(strays, "{:?}", report.failures);
 }
 
 /// The thesis' example of a badly chosen reference object (§3.2.4): block_a's placement
-/// grounded on block_b instead of on shelf_2.
+/// grounded on block_b instead of on shelf_2. Where the blocks moved little, block_a still
+/// lands on the shelf (the task asks for the shelf, not a place on it); elsewhere it is set down
+/// off the shelf's edge and falls.
 #[test]
 fn a_placement_grounded_on_a_nearby_block_fails_once_the_blocks_move() {
     let t = task("pick_place");
@@ -193,9 +209,14 @@ fn a_placement_grounded_on_a_nearby_block_fails_once_the_blocks_move() {
     kf.reference = "block_b".into();
     let report = run(&t, &wrong);
     assert!(
-        report.trials - report.passed >= 9,
+        report.trials - report.passed >= 7,
         "{} passed: {:?}",
         report.passed,
+        report.failures
+    );
+    assert!(
+        report.failures.contains_key(&Cause::Dropped),
+        "{:?}",
         report.failures
     );
 }
