@@ -88,6 +88,48 @@ pub enum Command {
     /// Exit codes: 0 measured; 2 bad input (a missing or invalid spec file, an unknown task, a
     /// spec naming objects the task does not have); 1 a randomized scene cannot be made.
     Flexibility(FlexibilityArgs),
+    /// Gate a deployment: the spec must pass its randomized trials and be least restrictive.
+    ///
+    /// The spec runs N randomized trials (as `akl execute --randomize N`, but with every
+    /// keyframe's goal drawn at random within its TSR, so the whole region is tried, not its
+    /// centre). Then it runs on the same seeds without each keyframe, and without each
+    /// move_in_line: a removal that still passes every trial is not essential, and a spec
+    /// with it is not the least restrictive one (thesis Theorem 3.2.3). With --demo (the
+    /// recording the spec was learned from) each of the teacher's answers is flipped, the
+    /// demonstration learned again with AKL and the result executed: a "no" is contradicted
+    /// when the spec fails and restoring the line makes it pass; a "yes" (or "I don't know")
+    /// when dropping the line still passes.
+    ///
+    /// Exit codes: 0 the spec passes every trial and nothing in it is superfluous; 1 a trial
+    /// failed, a removal passed, or an answer is contradicted; 2 bad input (a missing or
+    /// invalid spec or demo, an unknown task, a spec naming objects the task does not have, a
+    /// bad option).
+    Validate(ValidateArgs),
+    /// Widen every keyframe's TSR as far as the randomized trials allow, and write the result.
+    ///
+    /// For each keyframe and each of x, y, z, roll, pitch and yaw, the upper and then the lower
+    /// bound is pushed away from the nominal pose, first to its limit (10 cm, pi/2 for roll and
+    /// pitch, pi for yaw), then by bisection between the last bound that passed and the first
+    /// that failed (--depth steps). Each probe runs --trials randomized trials with goals drawn
+    /// within the part of the region it adds. The relaxed spec is then re-verified in --verify
+    /// trials on seeds the search never used (from SEED + 1,000,000); if a trial fails, the
+    /// widening is halved and verified again on new seeds, twice at most. Prints every bound
+    /// that moved and the bits of freedom gained (see `akl flexibility`).
+    ///
+    /// Exit codes: 0 the relaxed spec passed its verification and was written (atomically);
+    /// 1 the spec fails its own trials or no relaxation passed its verification (nothing is
+    /// written); 2 bad input.
+    Relax(RelaxArgs),
+    /// Compare specs of one task: keyframes, lines, bits of freedom, planning, execution and
+    /// the validation verdict, one row per spec.
+    ///
+    /// Bits of freedom as `akl flexibility`; plan success and best duration from the budgeted
+    /// planner over --scenes randomized scenes (as `akl flexibility`); the pass rate and the
+    /// verdict from `akl validate` with --randomize trials.
+    ///
+    /// Exit codes: 0 compared (whatever the verdicts); 2 bad input (a missing or invalid spec,
+    /// named); 1 anything else.
+    Compare(CompareArgs),
     /// The whole loop on a built-in task: teach, learn, then execute with randomized objects.
     ///
     /// The simulated teacher demonstrates the task while the online detector asks about its
@@ -245,6 +287,108 @@ pub struct FlexibilityArgs {
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the report as JSON instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Trial settings shared by `akl validate`, `relax` and `compare`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TrialArgs {
+    /// Trials run in parallel (default: the number of cores).
+    #[arg(long, value_name = "J")]
+    pub jobs: Option<usize>,
+    /// Perception error of the movable objects' poses (as `akl execute --pose-noise`).
+    #[arg(long, value_name = "MM,DEG", default_value = "2,1", value_parser = parse_pose_noise)]
+    pub pose_noise: PoseNoiseArg,
+}
+
+/// `akl validate SPEC --task T ...`
+#[derive(Debug, clap::Args)]
+pub struct ValidateArgs {
+    /// The spec file to validate.
+    pub spec: PathBuf,
+    /// Task (built-in name or task file) whose world the spec runs in.
+    #[arg(long)]
+    pub task: String,
+    /// Randomized trials of the spec and of each removal.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    pub randomize: usize,
+    /// Seed of the first trial (trial i uses SEED + i).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// The demonstration the spec was learned from (JSONL or MCAP): check the teacher's answers.
+    #[arg(long, value_name = "DEMO")]
+    pub demo: Option<PathBuf>,
+    /// Calibration the demonstration's detector ran with (default: the shipped one).
+    #[arg(long, value_name = "FILE", requires = "demo")]
+    pub calibration: Option<PathBuf>,
+    #[command(flatten)]
+    pub trials: TrialArgs,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print the validation as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `akl relax SPEC --task T -o relaxed.json`
+#[derive(Debug, clap::Args)]
+pub struct RelaxArgs {
+    /// The spec file to relax.
+    pub spec: PathBuf,
+    /// Task (built-in name or task file) whose world the spec runs in.
+    #[arg(long)]
+    pub task: String,
+    /// Where to write the relaxed spec.
+    #[arg(short = 'o', long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Randomized trials per probe of a bound.
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub trials: usize,
+    /// Bisection steps per bound once its limit has failed.
+    #[arg(long, value_name = "D", default_value_t = 4)]
+    pub depth: usize,
+    /// Trials the relaxed spec must pass on fresh seeds before it is written.
+    #[arg(long, value_name = "N", default_value_t = 30)]
+    pub verify: usize,
+    /// Seed of the search's first trial; verification uses seeds from SEED + 1,000,000.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub run: TrialArgs,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print the relaxation as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `akl compare SPEC... --task T`
+#[derive(Debug, clap::Args)]
+pub struct CompareArgs {
+    /// The spec files to compare.
+    #[arg(required = true)]
+    pub specs: Vec<PathBuf>,
+    /// Task (built-in name or task file) whose world the specs run in.
+    #[arg(long)]
+    pub task: String,
+    /// Randomized validation trials per spec (and per removal).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub randomize: usize,
+    /// Randomized scenes the budgeted planner plans each spec in.
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub scenes: usize,
+    /// Planning budget per scene in milliseconds (as `akl plan --budget`).
+    #[arg(long, value_name = "MS", default_value_t = 200)]
+    pub budget: u64,
+    /// Seed of the first trial and scene.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub trials: TrialArgs,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print the rows as JSON.
     #[arg(long)]
     pub json: bool,
 }

@@ -1,16 +1,18 @@
 //! TSR goals: poses drawn from a keyframe's grounded TSR, solved by inverse kinematics, kept
 //! when a caller's test (collision, approach, look-ahead) accepts them.
 //!
-//! Two strategies ([`GoalStrategy`]): `Nominal` stays on the TSR's nominal pose whenever it is
-//! reachable (the spec's demonstrated pose, exactly on target), nearest the current
+//! Three strategies ([`GoalStrategy`]): `Nominal` stays on the TSR's nominal pose whenever it
+//! is reachable (the spec's demonstrated pose, exactly on target), nearest the current
 //! configuration first; `Spread` draws poses across the whole region and keeps every IK branch
 //! it finds, quickest to reach first, so that a wider TSR gives the planner more to choose
-//! from.
+//! from; `Sampled` goes to a pose drawn at random within the region, the nominal not
+//! preferred, so that verification tries the whole region rather than its centre.
 
 use crate::robot::Robot;
 use crate::timing;
-use akl_tsr::{Pose, Tsr};
-use rand::Rng;
+use akl_tsr::{Keyframe, Pose, Tsr};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 
 /// Which goals a search returns, and in which order.
@@ -25,6 +27,14 @@ pub enum GoalStrategy {
     /// configuration first (the rest-to-rest time of the straight joint-space move, within the velocity and
     /// acceleration limits).
     Spread,
+    /// Poses drawn uniformly within the region (the nominal pose not among them, from the
+    /// keyframe's own stream, [`keyframe_stream`]), tried one at a time in the order drawn: the
+    /// goal is the first pose with an accepted configuration (its solutions nearest the
+    /// current configuration first), the end of a line the first drawn pose the line reaches. A trial's goal is then a random member of the TSR (of the
+    /// part the arm can use), which is what verifying a TSR's width needs: with `Nominal`
+    /// goals a wider TSR never changes the plan, so a trial would say nothing of the poses
+    /// the spec newly allows. `akl validate` and `akl relax` plan their trials this way.
+    Sampled,
 }
 
 /// How hard to look for goal configurations.
@@ -37,7 +47,7 @@ pub struct GoalOptions {
     /// Accepted candidates after which the search stops (with `Spread`, also the poses drawn
     /// at a time).
     pub enough: usize,
-    /// Nominal-first or spread across the region.
+    /// Nominal-first, spread across the region, or sampled within it (for verification).
     pub strategy: GoalStrategy,
 }
 
@@ -83,19 +93,49 @@ pub enum GoalFailure {
 }
 
 /// The poses to try: the TSR's nominal pose (or the nearest member, when the bounds exclude
-/// it), then uniform samples.
-pub fn tsr_poses<R: Rng + ?Sized>(tsr: &Tsr, count: usize, rng: &mut R) -> Vec<Pose> {
-    let nominal = tsr.nominal();
-    let first = if tsr.contains(&nominal) {
-        nominal
-    } else {
-        tsr.closest(&nominal)
-    };
-    let mut poses = vec![first];
+/// it), then uniform samples; with [`GoalStrategy::Sampled`], uniform samples only.
+pub fn tsr_poses<R: Rng + ?Sized>(
+    tsr: &Tsr,
+    count: usize,
+    strategy: GoalStrategy,
+    rng: &mut R,
+) -> Vec<Pose> {
+    let mut poses = Vec::with_capacity(count);
+    if strategy != GoalStrategy::Sampled {
+        let nominal = tsr.nominal();
+        poses.push(if tsr.contains(&nominal) {
+            nominal
+        } else {
+            tsr.closest(&nominal)
+        });
+    }
     while poses.len() < count {
         poses.push(tsr.sample(rng));
     }
     poses
+}
+
+/// The random stream a keyframe's [`GoalStrategy::Sampled`] goals are drawn from in a plan
+/// seeded `seed`. It depends on the seed and on the keyframe's region (reference, offset,
+/// bounds; not where its reference happens to stand), never on the keyframe's place in the
+/// spec, its gripper or the line into it: a region draws the same goals in every spec that
+/// has it, so a spec and the same spec without another keyframe, or without a line, are
+/// compared on the same goals (common random numbers), and a difference between their
+/// trials is the removal's doing.
+pub fn keyframe_stream(seed: u64, kf: &Keyframe) -> ChaCha8Rng {
+    // FNV-1a over the keyframe's words: stable across builds and platforms, unlike std's
+    // hasher; ChaCha whitens the result.
+    let mut h = 0xcbf2_9ce4_8422_2325_u64 ^ seed;
+    let mut eat = |word: u64| h = (h ^ word).wrapping_mul(0x0000_0100_0000_01b3);
+    kf.reference.bytes().for_each(|b| eat(u64::from(b)));
+    let tw_e = &kf.tsr.tw_e;
+    tw_e.translation
+        .vector
+        .iter()
+        .chain(tw_e.rotation.coords.iter())
+        .chain(kf.tsr.bw.0.iter().flatten())
+        .for_each(|v| eat(v.to_bits()));
+    ChaCha8Rng::seed_from_u64(h)
 }
 
 /// Searches goal configurations for `tsr` (world frame); `base` is the robot base pose,
@@ -105,7 +145,8 @@ pub fn tsr_poses<R: Rng + ?Sized>(tsr: &Tsr, count: usize, rng: &mut R) -> Vec<P
 /// target), otherwise poses are drawn until `enough` candidates are found, nearest `seed`
 /// first. With [`GoalStrategy::Spread`] poses are drawn `enough` at a time and their IK
 /// branches tried quickest to reach from `seed` first, until `enough` candidates are found,
-/// quickest first.
+/// quickest first. With [`GoalStrategy::Sampled`] only the candidates of the first drawn pose
+/// that yields any are returned, nearest `seed` first.
 pub fn find_goals<T, R: Rng + ?Sized>(
     robot: &Robot,
     tsr: &Tsr,
@@ -115,16 +156,17 @@ pub fn find_goals<T, R: Rng + ?Sized>(
     rng: &mut R,
     mut accept: impl FnMut(&Pose, &[f64]) -> Result<T, String>,
 ) -> Result<Vec<Candidate<T>>, GoalFailure> {
-    let poses = tsr_poses(tsr, options.poses, rng);
+    let poses = tsr_poses(tsr, options.poses, options.strategy, rng);
     let base_inv = base.inverse();
     let mut found: Vec<Candidate<T>> = Vec::new();
     let mut solutions = 0;
     let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
     let mut tried = 0;
-    // Nominal: one pose at a time. Spread: `enough` poses at a time, their IK branches tried
-    // quickest first, so the accept test (the costly part) runs on the best branches only.
+    // Nominal and Sampled: one pose at a time. Spread: `enough` poses at a time, their IK
+    // branches tried quickest first, so the accept test (the costly part) runs on the best
+    // branches only.
     let chunk = match options.strategy {
-        GoalStrategy::Nominal => 1,
+        GoalStrategy::Nominal | GoalStrategy::Sampled => 1,
         GoalStrategy::Spread => options.enough.max(1),
     };
     for (c, group) in poses.chunks(chunk).enumerate() {
@@ -154,8 +196,13 @@ pub fn find_goals<T, R: Rng + ?Sized>(
                 Err(reason) => *reasons.entry(reason).or_default() += 1,
             }
         }
-        let nominal_done = options.strategy == GoalStrategy::Nominal && c == 0;
-        if (nominal_done && !found.is_empty()) || found.len() >= options.enough {
+        let settled = !found.is_empty()
+            && match options.strategy {
+                GoalStrategy::Nominal => c == 0,
+                GoalStrategy::Sampled => true,
+                GoalStrategy::Spread => false,
+            };
+        if settled || found.len() >= options.enough {
             break;
         }
     }
@@ -171,7 +218,7 @@ pub fn find_goals<T, R: Rng + ?Sized>(
         });
     }
     match options.strategy {
-        GoalStrategy::Nominal => {
+        GoalStrategy::Nominal | GoalStrategy::Sampled => {
             let distance = |q: &[f64]| crate::space::distance(q, seed);
             found.sort_by(|a, b| distance(&a.q).total_cmp(&distance(&b.q)));
         }
@@ -192,4 +239,109 @@ pub fn move_time(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
         robot.acceleration_limits(),
     )
     .duration()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_tsr::pose::{pose_from_xyz_rpy, position_distance};
+    use akl_tsr::{Bounds, Constraint, Gripper, KeyframeKind};
+
+    /// A region ±4 cm and ±0.3 rad about a reachable pose in front of the Panda, pointing down.
+    fn region() -> Tsr {
+        Tsr::new(
+            pose_from_xyz_rpy([0.45, 0.0, 0.3], [std::f64::consts::PI, 0.0, 0.0]),
+            Pose::identity(),
+            Bounds::symmetric(0.04, 0.3),
+        )
+    }
+
+    fn goal(strategy: GoalStrategy, seed: u64) -> Candidate<()> {
+        let robot = Robot::panda().unwrap();
+        let options = GoalOptions {
+            strategy,
+            ..GoalOptions::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let found = find_goals(
+            &robot,
+            &region(),
+            &Pose::identity(),
+            robot.ready(),
+            &options,
+            &mut rng,
+            |_, _| Ok(()),
+        )
+        .unwrap();
+        found[0].clone()
+    }
+
+    #[test]
+    fn sampled_goals_go_across_the_region_and_nominal_ones_stay_on_its_centre() {
+        let tsr = region();
+        let nominal = tsr.nominal();
+        let sampled: Vec<Pose> = (0..6)
+            .map(|seed| goal(GoalStrategy::Sampled, seed).pose)
+            .collect();
+        for pose in &sampled {
+            assert!(tsr.contains(pose));
+            assert!(position_distance(pose, &nominal) > 1e-6);
+        }
+        let spread = sampled
+            .iter()
+            .map(|p| position_distance(p, &sampled[0]))
+            .fold(0.0, f64::max);
+        assert!(spread > 0.01, "sampled goals barely differ: {spread}");
+        for seed in 0..3 {
+            let pose = goal(GoalStrategy::Nominal, seed).pose;
+            assert!(position_distance(&pose, &nominal) < 1e-9);
+        }
+        assert_eq!(
+            goal(GoalStrategy::Sampled, 4).pose,
+            goal(GoalStrategy::Sampled, 4).pose
+        );
+    }
+
+    #[test]
+    fn sampled_poses_leave_the_nominal_out() {
+        let tsr = region();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let nominal = tsr.nominal();
+        let first = tsr_poses(&tsr, 5, GoalStrategy::Nominal, &mut rng);
+        assert_eq!(first[0], nominal);
+        let sampled = tsr_poses(&tsr, 5, GoalStrategy::Sampled, &mut rng);
+        assert_eq!(sampled.len(), 5);
+        assert!(sampled.iter().all(|p| *p != nominal && tsr.contains(p)));
+    }
+
+    #[test]
+    fn a_region_draws_from_its_own_stream_whatever_its_place() {
+        let kf = |reference: &str, x: f64| Keyframe {
+            kind: KeyframeKind::Interaction,
+            reference: reference.into(),
+            tsr: Tsr::new(
+                Pose::identity(),
+                pose_from_xyz_rpy([x, 0.0, 0.1], [0.0, 0.0, 0.0]),
+                Bounds::symmetric(0.01, 0.1),
+            ),
+            gripper: Gripper::Closed,
+            constraint: Constraint::None,
+            t: None,
+            frame: None,
+        };
+        let draw = |seed: u64, k: &Keyframe| keyframe_stream(seed, k).gen::<u64>();
+        let a = kf("part", 0.0);
+        let mut moved = a.clone();
+        moved.tsr.t0_w = pose_from_xyz_rpy([0.3, 0.1, 0.0], [0.0, 0.0, 1.0]);
+        moved.t = Some(3.0);
+        moved.constraint = Constraint::MoveInLine;
+        moved.gripper = Gripper::Open;
+        assert_eq!(draw(5, &a), draw(5, &moved), "only the region counts");
+        assert_ne!(draw(5, &a), draw(6, &a));
+        assert_ne!(draw(5, &a), draw(5, &kf("shelf", 0.0)));
+        assert_ne!(draw(5, &a), draw(5, &kf("part", 0.001)));
+        let mut wider = a.clone();
+        wider.tsr.bw.0[5] = [-0.2, 0.2];
+        assert_ne!(draw(5, &a), draw(5, &wider));
+    }
 }

@@ -16,6 +16,9 @@
 //! keyframe (see [`MS_PER_KEYFRAME`]), so a budget of a few hundred milliseconds buys tens of
 //! whole-spec evaluations, and the cost it minimizes is the one the robot pays.
 //!
+//! Verification plans differently: with `GoalStrategy::Sampled` every candidate draws its goals
+//! at random within the regions and the first candidate that plans is kept (see [`plan_best`]).
+//!
 //! The budget is a number of candidates, never a wall-clock limit: the same seed and budget
 //! give the same plan on any machine, however loaded.
 
@@ -115,6 +118,11 @@ fn candidate_seed(seed: u64, k: usize) -> u64 {
 
 /// Plans `options.budget.candidates` whole-spec candidates and keeps the quickest. Fails only
 /// if every candidate fails, with candidate 0's error (the nominal-first plan's reason).
+///
+/// With [`GoalStrategy::Sampled`] (verification) every candidate draws its goals at random and
+/// the first that plans is kept, not the quickest: a draw that leads nowhere (a grasp taken so
+/// high on an object that no pose of the release region clears the support) is drawn again,
+/// as a planner searching the regions would, while the plan kept stays a random draw.
 pub fn plan_best(
     robot: &Robot,
     spec: &TaskSpec,
@@ -127,10 +135,10 @@ pub fn plan_best(
     for k in 0..count {
         let mut candidate = options.clone();
         candidate.seed = candidate_seed(options.seed, k);
-        candidate.goals.strategy = if k == 0 {
-            options.goals.strategy
-        } else {
-            GoalStrategy::Spread
+        candidate.goals.strategy = match options.goals.strategy {
+            GoalStrategy::Sampled => GoalStrategy::Sampled,
+            first if k == 0 => first,
+            _ => GoalStrategy::Spread,
         };
         let result = plan_candidate(robot, spec, world, &candidate);
         candidates.push(CandidateOutcome {
@@ -145,6 +153,9 @@ pub fn plan_best(
             {
                 best = Some((k, plan));
             }
+        }
+        if options.goals.strategy == GoalStrategy::Sampled && best.is_some() {
+            break;
         }
     }
     let Some((chosen, mut plan)) = best else {

@@ -406,6 +406,14 @@ impl<'a> Planner<'a> {
         })
     }
 
+    /// The keyframe's own stream of goal draws with [`GoalStrategy::Sampled`] (see
+    /// [`crate::goal::keyframe_stream`]); with the other strategies goals come from the
+    /// planner's stream.
+    fn sampled_stream(&self, kf: &Keyframe) -> Option<ChaCha8Rng> {
+        (self.options.goals.strategy == GoalStrategy::Sampled)
+            .then(|| crate::goal::keyframe_stream(self.options.seed, kf))
+    }
+
     fn keyframe(&mut self, keyframes: &[Keyframe], i: usize) -> Result<(), PlanError> {
         let kf = &keyframes[i];
         let event = self.event_at(keyframes, i)?;
@@ -459,8 +467,10 @@ impl<'a> Planner<'a> {
             Some(planned) => planned,
             None => {
                 let allow = self.line_allowances(event);
-                let targets =
-                    crate::goal::tsr_poses(&kf.tsr, self.options.goals.poses, &mut self.rng);
+                let goals = &self.options.goals;
+                let mut own = self.sampled_stream(kf);
+                let rng = own.as_mut().unwrap_or(&mut self.rng);
+                let targets = crate::goal::tsr_poses(&kf.tsr, goals.poses, goals.strategy, rng);
                 let mut first_failure = None;
                 let mut found: Option<(f64, PlannedLine)> = None;
                 let mut planned_lines = 0;
@@ -472,7 +482,7 @@ impl<'a> Planner<'a> {
                             if found.as_ref().is_none_or(|(best, _)| time < *best) {
                                 found = Some((time, planned));
                             }
-                            if self.options.goals.strategy == GoalStrategy::Nominal
+                            if self.options.goals.strategy != GoalStrategy::Spread
                                 || planned_lines >= self.options.goals.enough
                             {
                                 break;
@@ -565,7 +575,9 @@ impl<'a> Planner<'a> {
         let base = self.base();
         let approach_distance = self.options.approach_distance;
         let line_options = self.options.line;
-        let mut lookahead_rng = ChaCha8Rng::seed_from_u64(self.options.seed ^ (i as u64 + 1));
+        let mut lookahead_rng = next
+            .and_then(|n| self.sampled_stream(n))
+            .unwrap_or_else(|| ChaCha8Rng::seed_from_u64(self.options.seed ^ (i as u64 + 1)));
         let this = &*self;
         let accept = |pose: &Pose, q: &[f64]| -> Result<GoalPaths, String> {
             if let Some(hit) = at_space.check(q) {
@@ -604,13 +616,14 @@ impl<'a> Planner<'a> {
             })
         };
         let mut rng = self.rng.clone();
+        let mut own = self.sampled_stream(kf);
         let candidates = find_goals(
             self.robot,
             &kf.tsr,
             &base,
             &self.q,
             &self.options.goals,
-            &mut rng,
+            own.as_mut().unwrap_or(&mut rng),
             accept,
         )
         .map_err(|failure| match failure {
@@ -795,7 +808,7 @@ impl<'a> Planner<'a> {
             allow: &allow,
         };
         let mut first = None;
-        for target in crate::goal::tsr_poses(&next.tsr, 4, rng) {
+        for target in crate::goal::tsr_poses(&next.tsr, 4, self.options.goals.strategy, rng) {
             match plan_line(&space, q, pose, &target, &self.base(), &self.options.line) {
                 Ok(path) => {
                     return Ok(PlannedLine {

@@ -2,7 +2,7 @@
 
 use super::robot::load as load_robot;
 use super::{check_output, print_json};
-use crate::cli::ExecuteArgs;
+use crate::cli::{ExecuteArgs, PoseNoiseArg};
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
@@ -73,10 +73,7 @@ pub fn run(args: ExecuteArgs) -> CliResult {
             budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
             ..PlanOptions::default()
         },
-        noise: PoseNoise {
-            position: args.pose_noise.millimetres * 1e-3,
-            yaw: args.pose_noise.degrees.to_radians(),
-        },
+        noise: pose_noise(args.pose_noise),
         ..ExecOptions::default()
     };
     if args.grounding_check {
@@ -116,8 +113,16 @@ pub fn run(args: ExecuteArgs) -> CliResult {
     verdict(&executed.report)
 }
 
+/// The perception error `--pose-noise` asks for.
+pub(crate) fn pose_noise(arg: PoseNoiseArg) -> PoseNoise {
+    PoseNoise {
+        position: arg.millimetres * 1e-3,
+        yaw: arg.degrees.to_radians(),
+    }
+}
+
 /// The worker threads `--jobs` asks for (default: the number of cores).
-fn jobs(asked: Option<usize>) -> Result<usize, CliError> {
+pub(crate) fn jobs(asked: Option<usize>) -> Result<usize, CliError> {
     match asked {
         Some(0) => Err(CliError::input("--jobs: needs at least one")),
         Some(j) => Ok(j),

@@ -1,6 +1,7 @@
 //! One module per top-level command.
 
 mod calibrate;
+mod compare;
 mod demo;
 mod eval;
 mod execute;
@@ -8,16 +9,20 @@ mod flexibility;
 mod grounding;
 mod learn;
 mod plan;
+mod relax;
 mod robot;
 mod score;
 mod spec;
 mod task;
 mod teach;
+mod validate;
 
 use crate::cli::{Cli, Command};
 use crate::exit::{CliError, CliResult};
 use akl_learn::calibration::Calibration;
 use akl_learn::teacher::TeacherProfile;
+use akl_scene::Task;
+use akl_tsr::{FileError, TaskSpec};
 use std::path::Path;
 
 /// Runs the parsed command line.
@@ -33,6 +38,9 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Plan(args) => plan::run(args),
         Command::Execute(args) => execute::run(args),
         Command::Flexibility(args) => flexibility::run(args),
+        Command::Validate(args) => validate::run(args),
+        Command::Relax(args) => relax::run(args),
+        Command::Compare(args) => compare::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Eval(args) => eval::run(args),
     }
@@ -79,6 +87,19 @@ pub(crate) fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// The spec in `path`, checked against `task`'s objects; errors name the file.
+pub(crate) fn load_spec_for(path: &Path, task: &Task) -> Result<TaskSpec, CliError> {
+    let spec = TaskSpec::load(path).map_err(CliError::input)?;
+    spec.check_references(task.world.names())
+        .map_err(|source| {
+            CliError::input(FileError {
+                path: path.to_path_buf(),
+                source,
+            })
+        })?;
+    Ok(spec)
 }
 
 /// Prints a value as pretty JSON on stdout.

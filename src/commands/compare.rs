@@ -1,0 +1,106 @@
+//! `akl compare SPEC... --task T`: one row per spec.
+
+use super::robot::load as load_robot;
+use super::validate::{cli_error, exec_options, trials};
+use super::{load_spec_for, print_json};
+use crate::cli::CompareArgs;
+use crate::exit::{CliError, CliResult};
+use crate::progress::Progress;
+use crate::table::Table;
+use akl_scene::builtin;
+use akl_validate::compare::{compare, CompareOptions, Row};
+use akl_validate::ValidateOptions;
+use serde::Serialize;
+
+#[derive(Serialize)]
+struct Compared {
+    task: String,
+    trials: usize,
+    scenes: usize,
+    budget_ms: u64,
+    seed: u64,
+    rows: Vec<Row>,
+}
+
+pub fn run(args: CompareArgs) -> CliResult {
+    let robot = load_robot(&args.robot)?;
+    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let specs = args
+        .specs
+        .iter()
+        .map(|p| Ok((p.display().to_string(), load_spec_for(p, &task)?)))
+        .collect::<Result<Vec<_>, CliError>>()?;
+    let options = CompareOptions {
+        validate: ValidateOptions {
+            trials: trials(args.randomize, args.seed, &args.trials)?,
+            exec: exec_options(&args.trials),
+        },
+        scenes: args.scenes,
+        budget_ms: args.budget,
+    };
+    let progress = Progress::new(
+        &format!("comparing on `{}`", task.name),
+        specs.len() * args.randomize,
+    );
+    let rows = compare(&robot, &task, &specs, &options, &|done, _| {
+        progress.set(done * args.randomize)
+    });
+    progress.finish();
+    // Every spec was loaded and checked against the task above, so an error here is the
+    // task's or the run's, not a file's; clap guarantees at least one spec to name.
+    let rows = rows.map_err(|e| cli_error(e, &args.specs[0], &task))?;
+    let compared = Compared {
+        task: task.name.clone(),
+        trials: args.randomize,
+        scenes: args.scenes,
+        budget_ms: args.budget,
+        seed: args.seed,
+        rows,
+    };
+    if args.json {
+        return print_json(&compared);
+    }
+    print_compared(&compared);
+    Ok(())
+}
+
+fn print_compared(c: &Compared) {
+    println!(
+        "task `{}`: bits of freedom on the 5 cm lattice; planning over {} randomized scenes (budget {} ms); {} validation trials per spec (seeds {}..)",
+        c.task, c.scenes, c.budget_ms, c.trials, c.seed
+    );
+    let mut table = Table::new([
+        "spec",
+        "method",
+        "keyframes",
+        "constraints",
+        "bits",
+        "plan success",
+        "best duration",
+        "pass rate",
+        "validation",
+    ]);
+    for r in &c.rows {
+        let verdict = if r.not_essential.is_empty() {
+            r.verdict.label().to_string()
+        } else {
+            format!(
+                "{} (not essential: {})",
+                r.verdict.label(),
+                r.not_essential.join(", ")
+            )
+        };
+        table.row(vec![
+            r.spec.clone(),
+            r.method.clone(),
+            r.keyframes.to_string(),
+            r.constraints.to_string(),
+            r.bits.map_or("no trace".into(), |b| format!("{b:.1}")),
+            format!("{:.0} %", r.plan_success * 100.0),
+            r.best_duration.map_or("-".into(), |d| format!("{d:.2} s")),
+            format!("{:.0} %", r.pass_rate * 100.0),
+            verdict,
+        ]);
+    }
+    print!("{}", table.render());
+}

@@ -1,0 +1,361 @@
+//! The teacher's answers the simulation contradicts (thesis §4.6: most of AKL's constraint
+//! errors came from wrong answers).
+//!
+//! Each answer to "Do I have to move in a straight line there?" is flipped and the
+//! demonstration learned again with AKL, and the spec that gives is executed. Flipping the
+//! recorded answer alone would not do: online, a "no" switched the detector off at once, so
+//! the recording holds only the start of that line. The demonstration's frames are therefore
+//! replayed through the online detector and the dialogue ([`akl_learn::teach::stream_demo`]),
+//! each query answered as the teacher answered the latest recorded query at or before it (a
+//! teacher asked again about the same stretch answers alike), the flipped one the other way.
+//! Then:
+//! - a "no" is **contradicted** when the spec learned with it fails trials and the spec
+//!   learned with "yes" there (the line restored) passes most of those: the line was needed
+//!   (most, not all: a trial can fail for reasons the line does not touch, and then fails
+//!   with the line too, the keyframes both specs share drawing the same goals);
+//! - a "yes" (or an "I don't know", which keeps the line too) is **contradicted** when the
+//!   spec learned with "no" there (the line dropped) still passes every trial (of those the
+//!   spec learned with the answers as given passed, as [`crate::ablation`] judges);
+//! - otherwise the answer is **confirmed** (a "no" whose spec passes every trial, a "yes"
+//!   whose line dropped fails), or **inconclusive** (a "no" whose restored line turns at most
+//!   half of the failed trials into passes); an answer whose flip learns the same spec is
+//!   **unchanged**.
+//!
+//! The answers are judged on the spec AKL learns from the demonstration as recorded (the
+//! baseline), which is the spec validated when that spec was learned from this demonstration
+//! with the same settings; the report says whether it is.
+
+use crate::trials::{run_seeds, run_trials, Outcome, Stop, Trials};
+use crate::ValidateError;
+use akl_exec::trial::ExecOptions;
+use akl_learn::baselines::kd::marked_frames;
+use akl_learn::dialogue::{AnswerSource, DialogueError, Question};
+use akl_learn::teach::{session_header, stream_demo, Pace};
+use akl_learn::{learn_spec, Answer, Calibration, Demo, DialogueKind, LearnOptions, Method};
+use akl_planner::Robot;
+use akl_scene::Task;
+use akl_tsr::{Constraint, TaskSpec};
+use serde::Serialize;
+
+/// What the trials say of one answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AnswerVerdict {
+    /// The simulation contradicts the answer.
+    Contradicted,
+    /// The simulation agrees with the answer.
+    Confirmed,
+    /// A "no" whose line, restored, turns at most half of the failed trials into passes.
+    Inconclusive,
+    /// Flipping the answer learns the same spec.
+    Unchanged,
+}
+
+/// One answer of the demonstration, flipped and executed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AnswerCheck {
+    /// Which answer of the demonstration (0 for the first).
+    pub index: usize,
+    /// When it was given (demonstration seconds).
+    pub t: f64,
+    /// The frame it was given at.
+    pub frame: usize,
+    /// The answer as recorded.
+    pub answer: Answer,
+    /// The answer it was flipped to.
+    pub flipped_to: Answer,
+    /// `move_in_line` segments of the spec learned with the flip.
+    pub lines_when_flipped: usize,
+    /// The trials of the spec learned with the flip, when they were needed: for a "no", on
+    /// the seeds the spec failed; otherwise on those it passed, stopped at the first failure.
+    pub outcome: Option<Outcome>,
+    /// The verdict.
+    pub verdict: AnswerVerdict,
+}
+
+/// Every answer of a demonstration, judged.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Answers {
+    /// Whether AKL learns exactly the validated spec's keyframes from the demonstration.
+    pub spec_is_learned_from_demo: bool,
+    /// `move_in_line` segments of the spec learned from the demonstration as recorded.
+    pub lines: usize,
+    /// Its trials (the validated spec's own when it is that spec).
+    pub baseline: Outcome,
+    /// One check per answer, in the order given.
+    pub checks: Vec<AnswerCheck>,
+}
+
+impl Answers {
+    /// The answers the simulation contradicts.
+    pub fn contradicted(&self) -> impl Iterator<Item = &AnswerCheck> {
+        self.checks
+            .iter()
+            .filter(|c| c.verdict == AnswerVerdict::Contradicted)
+    }
+}
+
+fn lines(spec: &TaskSpec) -> usize {
+    spec.keyframes
+        .iter()
+        .filter(|k| k.constraint == Constraint::MoveInLine)
+        .count()
+}
+
+/// The recorded answers, each with the frame of the query it answered (its own frame when no
+/// query precedes it), in order.
+pub fn recorded_answers(demo: &Demo) -> Vec<(usize, Answer)> {
+    let mut query = None;
+    let mut out = Vec::new();
+    for e in &demo.events {
+        match e.kind {
+            DialogueKind::Query => query = Some(e.frame),
+            DialogueKind::Answer(a) => out.push((query.take().unwrap_or(e.frame), a)),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Answers a replay's queries as the teacher answered the recording's: the answer to the
+/// latest recorded query at or before the query's frame (the first recorded answer before
+/// any).
+#[derive(Debug, Clone)]
+pub struct ReplayedAnswers {
+    recorded: Vec<(usize, Answer)>,
+}
+
+impl ReplayedAnswers {
+    /// The recorded answers (see [`recorded_answers`]) with the `index`-th replaced by `to`,
+    /// when given.
+    pub fn new(mut recorded: Vec<(usize, Answer)>, flip: Option<(usize, Answer)>) -> Self {
+        if let Some((index, to)) = flip {
+            if let Some(r) = recorded.get_mut(index) {
+                r.1 = to;
+            }
+        }
+        ReplayedAnswers { recorded }
+    }
+}
+
+impl AnswerSource for ReplayedAnswers {
+    fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
+        let latest = self
+            .recorded
+            .iter()
+            .rev()
+            .find(|(frame, _)| *frame <= question.frame)
+            .or(self.recorded.first());
+        Ok(latest.map_or(Answer::Unknown, |(_, a)| *a))
+    }
+}
+
+/// `demo` replayed through the online detector and dialogue with `answers`, then learned with
+/// AKL.
+fn relearn(
+    demo: &Demo,
+    task: &Task,
+    calibration: &Calibration,
+    learn: &LearnOptions,
+    mut answers: ReplayedAnswers,
+) -> Result<TaskSpec, ValidateError> {
+    let header = session_header(&demo.header, None);
+    let (replayed, _) = stream_demo(
+        demo,
+        header,
+        &marked_frames(demo),
+        calibration.clone(),
+        &mut answers,
+        None,
+        &Pace::default(),
+    )
+    .map_err(|e| ValidateError::Replay(e.to_string()))?;
+    Ok(learn_spec(Method::Akl, &replayed, Some(&task.world), learn)?)
+}
+
+/// Whether two specs have the same keyframes, where in the demonstration they came from
+/// aside (a recording rounds its times).
+fn same_keyframes(a: &TaskSpec, b: &TaskSpec) -> bool {
+    a.keyframes.len() == b.keyframes.len()
+        && a.keyframes.iter().zip(&b.keyframes).all(|(x, y)| {
+            x.kind == y.kind
+                && x.reference == y.reference
+                && x.tsr == y.tsr
+                && x.gripper == y.gripper
+                && x.constraint == y.constraint
+        })
+}
+
+/// The demonstration a spec was learned from, and how it was learned.
+#[derive(Debug, Clone, Copy)]
+pub struct DemoSource<'a> {
+    /// The recording.
+    pub demo: &'a Demo,
+    /// The calibration its online detector ran with.
+    pub calibration: &'a Calibration,
+    /// The learning settings the spec was learned with.
+    pub learn: &'a LearnOptions,
+}
+
+/// Judges every answer of `source`, the demonstration `spec` was learned from, executing on
+/// `trials` (`spec_outcome`: `spec`'s own trials on them); `progress` is called after each
+/// answer with (done, total).
+#[allow(clippy::too_many_arguments)]
+pub fn check_answers(
+    robot: &Robot,
+    task: &Task,
+    source: DemoSource,
+    spec: &TaskSpec,
+    spec_outcome: &Outcome,
+    exec: &ExecOptions,
+    trials: &Trials,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Answers, ValidateError> {
+    let demo = source.demo;
+    if demo.detector.is_empty() {
+        return Err(ValidateError::NoDetector);
+    }
+    let recorded = recorded_answers(demo);
+    let learned = |flip| {
+        relearn(
+            demo,
+            task,
+            source.calibration,
+            source.learn,
+            ReplayedAnswers::new(recorded.clone(), flip),
+        )
+    };
+    let baseline = learned(None)?;
+    let same = same_keyframes(&baseline, spec);
+    let baseline_outcome = if same {
+        spec_outcome.clone()
+    } else {
+        run_trials(robot, task, &baseline, exec, trials, Stop::Never)?
+    };
+    let answers: Vec<(f64, usize, Answer)> = demo
+        .events
+        .iter()
+        .filter_map(|e| match e.kind {
+            DialogueKind::Answer(a) => Some((e.t, e.frame, a)),
+            _ => None,
+        })
+        .collect();
+    debug_assert_eq!(answers.len(), recorded.len());
+    let mut checks = Vec::with_capacity(answers.len());
+    for (index, (t, frame, answer)) in answers.iter().copied().enumerate() {
+        let flipped_to = match answer {
+            Answer::No => Answer::Yes,
+            Answer::Yes | Answer::Unknown => Answer::No,
+        };
+        let flipped = learned(Some((index, flipped_to)))?;
+        let (outcome, verdict) = if same_keyframes(&flipped, &baseline) {
+            (None, AnswerVerdict::Unchanged)
+        } else if answer == Answer::No && baseline_outcome.all_passed() {
+            (None, AnswerVerdict::Confirmed)
+        } else if answer == Answer::No {
+            // The line restored, on the trials the spec failed without it: the trials that fail
+            // for reasons the line does not touch fail alike with it (the keyframes both specs
+            // share draw the same goals), so a majority turned into passes is the line's doing.
+            let outcome = run_seeds(
+                robot,
+                task,
+                &flipped,
+                exec,
+                &baseline_outcome.failed_seeds,
+                trials.jobs,
+                Stop::Never,
+            )?;
+            let verdict = if 2 * outcome.passed > outcome.run {
+                AnswerVerdict::Contradicted
+            } else {
+                AnswerVerdict::Inconclusive
+            };
+            (Some(outcome), verdict)
+        } else {
+            // The line dropped, judged like a removal on the trials the spec passed with it.
+            let seeds: Vec<u64> = trials
+                .seeds()
+                .into_iter()
+                .filter(|s| !baseline_outcome.failed_seeds.contains(s))
+                .collect();
+            let outcome = run_seeds(
+                robot,
+                task,
+                &flipped,
+                exec,
+                &seeds,
+                trials.jobs,
+                Stop::AtFirstFailure,
+            )?;
+            let verdict = if outcome.all_passed() {
+                AnswerVerdict::Contradicted
+            } else {
+                AnswerVerdict::Confirmed
+            };
+            (Some(outcome), verdict)
+        };
+        checks.push(AnswerCheck {
+            index,
+            t,
+            frame,
+            answer,
+            flipped_to,
+            lines_when_flipped: lines(&flipped),
+            outcome,
+            verdict,
+        });
+        progress(index + 1, answers.len());
+    }
+    Ok(Answers {
+        spec_is_learned_from_demo: same,
+        lines: lines(&baseline),
+        baseline: baseline_outcome,
+        checks,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_learn::DialogueEvent;
+    use akl_tsr::nalgebra::Vector3;
+
+    fn question(frame: usize) -> Question {
+        Question {
+            t: frame as f64 * 0.01,
+            frame,
+            line_start: Vector3::zeros(),
+            line_end: Vector3::x(),
+            nearest_objects: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_replay_is_answered_as_the_recording_was_with_one_answer_flipped() {
+        let mut demo = Demo::empty(akl_learn::DemoHeader::new("inspection"), &[]);
+        let event = |frame: usize, kind| DialogueEvent {
+            t: frame as f64 * 0.01,
+            frame,
+            kind,
+        };
+        demo.events = vec![
+            event(10, DialogueKind::Query),
+            event(12, DialogueKind::Answer(Answer::No)),
+            event(13, DialogueKind::Suggestion),
+            event(50, DialogueKind::Query),
+            event(51, DialogueKind::Answer(Answer::Yes)),
+        ];
+        let recorded = recorded_answers(&demo);
+        assert_eq!(recorded, vec![(10, Answer::No), (50, Answer::Yes)]);
+        let mut same = ReplayedAnswers::new(recorded.clone(), None);
+        assert_eq!(same.answer(&question(10)), Ok(Answer::No));
+        assert_eq!(same.answer(&question(30)), Ok(Answer::No), "asked again");
+        assert_eq!(same.answer(&question(50)), Ok(Answer::Yes));
+        assert_eq!(same.answer(&question(3)), Ok(Answer::No), "before any");
+        let mut flipped = ReplayedAnswers::new(recorded, Some((0, Answer::Yes)));
+        assert_eq!(flipped.answer(&question(10)), Ok(Answer::Yes));
+        assert_eq!(flipped.answer(&question(50)), Ok(Answer::Yes));
+        let mut none = ReplayedAnswers::new(Vec::new(), None);
+        assert_eq!(none.answer(&question(5)), Ok(Answer::Unknown));
+    }
+}
