@@ -27,6 +27,7 @@ use akl_planner::fk::{Drive, Motion};
 use akl_planner::{Geometry, Robot};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;
+use rapier3d::pipeline::ActiveHooks;
 use rapier3d::prelude::{
     ActiveCollisionTypes, ColliderHandle, InteractionGroups, InteractionTestMode, RigidBodyBuilder,
     RigidBodyHandle,
@@ -245,8 +246,15 @@ impl SimArm {
                     .pose(to_sim(&arm.poses[i]))
                     .build(),
             );
+            // The pads' contacts with a welded object are left out while it is welded.
+            let hooks = if arm.hand.finger(i).is_some() {
+                ActiveHooks::FILTER_CONTACT_PAIRS
+            } else {
+                ActiveHooks::empty()
+            };
             for (geometry, origin) in shapes {
                 let collider = link_collider(&geometry, &origin)
+                    .active_hooks(hooks)
                     .friction(LINK_FRICTION as f32)
                     .restitution(0.0)
                     .collision_groups(InteractionGroups::new(

@@ -178,6 +178,15 @@ pub struct StepContext<'a> {
     pub t: f64,
 }
 
+/// Whether a contact between `a` and `b` is judged: one of them is a robot link or the object
+/// in the hand.
+fn watched(a: Owner, b: Owner, held: Option<usize>) -> bool {
+    match (a, b) {
+        (Owner::Link(_), _) | (_, Owner::Link(_)) => true,
+        (Owner::Object(x), Owner::Object(y)) => held.is_some_and(|h| h == x || h == y),
+    }
+}
+
 /// Steps over which a force must be kept up to count: 3 steps (12.5 ms at 240 Hz).
 pub const SUSTAIN_STEPS: usize = 3;
 
@@ -210,6 +219,12 @@ impl ContactLog {
         let mut recent = std::mem::take(&mut self.spare);
         recent.clear();
         for pair in sim.physics.narrow_phase.contact_pairs() {
+            let (Some(a), Some(b)) = (sim.owner(pair.collider1), sim.owner(pair.collider2)) else {
+                continue;
+            };
+            if !watched(a, b, step.held) {
+                continue;
+            }
             let Some((_, deepest)) = pair.find_deepest_contact() else {
                 continue;
             };
@@ -219,9 +234,6 @@ impl ContactLog {
                 continue;
             }
             let force = self.sustained(pair.collider1, pair.collider2, impulse_force, &mut recent);
-            let (Some(a), Some(b)) = (sim.owner(pair.collider1), sim.owner(pair.collider2)) else {
-                continue;
-            };
             let Some((a, b, verdict)) = self.classify(sim, roles, step, a, b) else {
                 continue;
             };

@@ -11,7 +11,8 @@
 //! - the object's centre is within [`GraspLimits::max_centre_offset`] of the pads' mid-plane;
 //! - each pad overlaps the object over at least [`GraspLimits::min_overlap`] of its face;
 //!
-//! and the weld breaks when the load on it exceeds what friction could hold: the force along
+//! While welded, the pads' contacts with the object are not computed, so the weld carries
+//! the whole load; and the weld breaks when that load exceeds what friction could hold: the force along
 //! the pads' faces above `2 μ F` (two pads squeezing with the hand's force `F`, friction `μ`
 //! combined as rapier does, the mean of pad and object), or the torque about the closing axis
 //! above `2 μ F r` (`r` a quarter of the smaller side of the overlap). A broken weld lets the
@@ -217,6 +218,8 @@ pub struct Weld {
     /// Its pose in the TCP frame when welded.
     pub in_tcp: Pose,
     joint: ImpulseJointHandle,
+    /// The pads' links, whose contacts with the object are left out while it is welded.
+    pads: [usize; 2],
     /// Largest force along the pads' faces friction holds (N).
     pub force_capacity: f64,
     /// Largest torque about the closing axis friction holds (N·m).
@@ -269,10 +272,15 @@ impl Weld {
             .physics
             .impulse_joints
             .insert(palm_body, object_body, joint, true);
+        for f in fingers {
+            sim.set_unsolved(f.link, object, true);
+        }
+        let pads = [fingers[0].link, fingers[1].link];
         Some(Weld {
             object,
             in_tcp: tcp.inverse() * object_pose,
             joint,
+            pads,
             force_capacity: 2.0 * mu * grasp_force,
             torque_capacity: 2.0 * mu * grasp_force * grasp.lever,
             closing,
@@ -287,7 +295,8 @@ impl Weld {
                 torque: 0.0,
             };
         };
-        let dt = sim.dt();
+        // A joint's impulses are its last substep's.
+        let dt = sim.dt() / sim.substeps() as f64;
         let i = joint.impulses;
         let linear = Vector3::new(f64::from(i[0]), f64::from(i[1]), f64::from(i[2])) / dt;
         let angular = Vector3::new(f64::from(i[3]), f64::from(i[4]), f64::from(i[5])) / dt;
@@ -306,6 +315,9 @@ impl Weld {
     /// Removes the weld: the object is free and physics takes over.
     pub fn release(self, sim: &mut SimWorld) {
         sim.physics.impulse_joints.remove(self.joint, true);
+        for pad in self.pads {
+            sim.set_unsolved(pad, self.object, false);
+        }
         if let Some(body) = sim.physics.bodies.get_mut(sim.objects[self.object].body) {
             if body.body_type() != RigidBodyType::Dynamic {
                 body.set_body_type(RigidBodyType::Dynamic, true);
@@ -317,5 +329,114 @@ impl Weld {
     pub fn slip(&self, sim: &SimWorld, tcp: &Pose) -> f64 {
         let now = tcp.inverse() * sim.object_pose(self.object);
         (now.translation.vector - self.in_tcp.translation.vector).norm()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arm::{Drives, FingerCommand};
+    use crate::world::Physics;
+    use akl_planner::Robot;
+    use akl_scene::{Object, Shape, World};
+    use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
+    use std::f64::consts::PI;
+
+    /// A block of `mass` on a table, the hand closed on it, welded, then lifted 5 cm in 0.5 s:
+    /// the largest load along the pads' faces, the capacity, and the slip at the end.
+    fn lift(mass: f64) -> (f64, f64, f64) {
+        let robot = Robot::panda().unwrap();
+        let world = World {
+            robot_base: Pose::identity(),
+            objects: vec![
+                Object {
+                    name: "table".into(),
+                    shape: Shape::Box {
+                        size: [0.6, 0.6, 0.04],
+                    },
+                    pose: pose_from_xyz([0.5, 0.0, -0.02]),
+                    movable: false,
+                    mass: 0.0,
+                    friction: 0.6,
+                },
+                Object {
+                    name: "block".into(),
+                    shape: Shape::Box {
+                        size: [0.05, 0.05, 0.08],
+                    },
+                    pose: pose_from_xyz([0.5, 0.0, 0.04]),
+                    movable: true,
+                    mass,
+                    friction: 0.9,
+                },
+            ],
+        };
+        let mut sim = SimWorld::new(&world, &Physics::default());
+        let grasp = pose_from_xyz_rpy([0.5, 0.0, 0.055], [PI, 0.0, 0.0]);
+        let q0 = robot.ik(&grasp, robot.ready()).unwrap();
+        let mut arm = SimArm::new(
+            &mut sim,
+            &robot,
+            Pose::identity(),
+            &q0,
+            0.08,
+            &Drives::default(),
+        )
+        .unwrap();
+        arm.command_fingers(FingerCommand::Grasp);
+        let still = vec![0.0; q0.len()];
+        let dt = sim.dt();
+        for _ in 0..240 {
+            let pads = read_pads(&sim, &arm);
+            arm.advance(&mut sim, &robot, (&q0, &still), &pads, dt);
+            sim.step();
+            if arm.closed() {
+                break;
+            }
+        }
+        assert!(arm.closed(), "the pads closed on the block");
+        let grasped = measure(&sim, &arm, 1);
+        assert!(grasped.unsound(&GraspLimits::default()).is_none());
+        let weld =
+            Weld::attach(&mut sim, &arm, 1, &grasped, crate::arm::FRANKA_HAND_FORCE).unwrap();
+        arm.command_fingers(FingerCommand::Width(arm.width()));
+        let up = robot
+            .ik(&(pose_from_xyz([0.0, 0.0, 0.05]) * grasp), &q0)
+            .unwrap();
+        let mut peak: f64 = 0.0;
+        let mut held = Some(weld);
+        for k in 1..=240 {
+            let s = (f64::from(k) / 120.0).min(1.0);
+            let q: Vec<f64> = q0.iter().zip(&up).map(|(a, b)| a + s * (b - a)).collect();
+            let rate = if k <= 120 { 2.0 } else { 0.0 };
+            let qd: Vec<f64> = q0.iter().zip(&up).map(|(a, b)| rate * (b - a)).collect();
+            arm.advance(&mut sim, &robot, (&q, &qd), &[PadReading::NOTHING; 2], dt);
+            sim.step();
+            if let Some(w) = held {
+                let load = w.load(&sim);
+                peak = peak.max(load.force);
+                if w.overloaded(&load) {
+                    w.release(&mut sim);
+                    held = None;
+                }
+            }
+        }
+        (peak, weld.force_capacity, weld.slip(&sim, &arm.tcp(&sim)))
+    }
+
+    #[test]
+    fn a_light_block_stays_welded_and_a_heavy_one_breaks_loose() {
+        let (peak, capacity, slip) = lift(0.2);
+        assert!(
+            peak < capacity && slip < 1e-3,
+            "{peak} N of {capacity} N, slip {slip}"
+        );
+        // Its weight, and the lift's acceleration: the load is measured in newtons.
+        assert!(peak > 0.2 * 9.81 && peak < 0.2 * 15.0, "{peak} N");
+        assert!((capacity - 2.0 * 0.95 * 70.0).abs() < 1e-9);
+        // 20 kg weigh 196 N, more than the 133 N two pads at 70 N hold by friction.
+        let (peak, capacity, slip) = lift(20.0);
+        assert!(peak > capacity, "{peak} N of {capacity} N");
+        assert!(slip > 0.005, "the block fell out of the hand: slip {slip}");
     }
 }

@@ -106,8 +106,21 @@ impl fmt::Display for Cause {
 pub struct Failure {
     /// Its cause.
     pub cause: Cause,
+    /// The stage the cause belongs to.
+    pub stage: Stage,
     /// What exactly failed, naming the keyframe, segment or objects.
     pub detail: String,
+}
+
+impl Failure {
+    /// A failure for `cause`, saying `detail`.
+    pub fn new(cause: Cause, detail: impl Into<String>) -> Failure {
+        Failure {
+            cause,
+            stage: cause.stage(),
+            detail: detail.into(),
+        }
+    }
 }
 
 /// Whether a keyframe was reached within its TSR grounded on its reference's current pose.
@@ -409,10 +422,7 @@ mod tests {
             passed: causes.is_empty(),
             failures: causes
                 .iter()
-                .map(|c| Failure {
-                    cause: *c,
-                    detail: String::new(),
-                })
+                .map(|c| Failure::new(*c, String::new()))
                 .collect(),
             placements: BTreeMap::new(),
             perceived: BTreeMap::new(),

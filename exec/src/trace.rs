@@ -141,6 +141,21 @@ impl Primitives {
             "color": color(rgba)}));
     }
 
+    /// The TCP positions of `tsr` grounded on `reference`: its bounds' box, in the reference's
+    /// axes, around the nominal TCP position; returns that nominal pose.
+    fn tsr_region(&mut self, reference: &Pose, tsr: &akl_tsr::Tsr, rgba: [f64; 4]) -> Pose {
+        let bw = tsr.bw.0;
+        let centre = Vector3::from_fn(|i, _| 0.5 * (bw[i][0] + bw[i][1]));
+        let size = Vector3::from_fn(|i, _| (bw[i][1] - bw[i][0]).max(1e-3));
+        let nominal = reference * tsr.tw_e;
+        let region = Pose::from_parts(
+            Translation3::from(nominal.translation.vector + reference.rotation * centre),
+            reference.rotation,
+        );
+        self.cube(&region, size, rgba);
+        nominal
+    }
+
     fn text(&mut self, at: &Pose, text: &str) {
         self.texts.push(
             json!({"pose": pose(at), "billboard": true, "font_size": 14.0,
@@ -503,15 +518,7 @@ fn planning_failure(
     for (k, kf) in grounded.keyframes.iter().enumerate() {
         let mut p = Primitives::default();
         let rgba = if Some(k) == failed { FAIL } else { PASS };
-        let nominal = kf.tsr.nominal();
-        let bw = kf.tsr.bw.0;
-        let centre = Vector3::from_fn(|i, _| 0.5 * (bw[i][0] + bw[i][1]));
-        let size = Vector3::from_fn(|i, _| (bw[i][1] - bw[i][0]).max(1e-3));
-        let region = Pose::from_parts(
-            Translation3::from(nominal.translation.vector + kf.tsr.t0_w.rotation * centre),
-            kf.tsr.t0_w.rotation,
-        );
-        p.cube(&region, size, rgba);
+        let nominal = p.tsr_region(&kf.tsr.t0_w, &kf.tsr, rgba);
         p.text(
             &(Translation3::new(0.0, 0.0, 0.04) * nominal),
             &format!("keyframe {k}"),
@@ -582,19 +589,9 @@ fn keyframes(input: &TraceInput, channel: u16) -> Vec<(f64, u16, Value)> {
             let kf = input.spec.keyframes.get(c.keyframe)?;
             let reference = c.grounded_on.to_pose().ok()?;
             let tcp = c.tcp.to_pose().ok()?;
-            let bw = kf.tsr.bw.0;
-            let centre = Vector3::from_fn(|i, _| 0.5 * (bw[i][0] + bw[i][1]));
-            let size = Vector3::from_fn(|i, _| (bw[i][1] - bw[i][0]).max(1e-3));
-            // The TCP positions of the TSR: the bounds' box, in frame w's axes, around the
-            // nominal TCP position.
-            let nominal = reference * kf.tsr.tw_e;
-            let region = Pose::from_parts(
-                Translation3::from(nominal.translation.vector + reference.rotation * centre),
-                reference.rotation,
-            );
             let mut p = Primitives::default();
             let rgba = if c.reached { PASS } else { FAIL };
-            p.cube(&region, size, rgba);
+            let nominal = p.tsr_region(&reference, &kf.tsr, rgba);
             p.arrow(&tcp, 0.06, [rgba[0], rgba[1], rgba[2], 1.0]);
             p.text(
                 &(Translation3::new(0.0, 0.0, 0.04) * nominal),
@@ -713,11 +710,12 @@ mod tests {
     use crate::batch::{Batch, BatchOptions};
     use crate::trial::ExecOptions;
 
-    #[test]
-    fn a_trace_holds_every_channel_and_reads_back() {
+    /// Runs one randomized trial of `spec` on inspection (seed 3), writes its trace to a
+    /// scratch file named after `name`, and reads it back: the report, the frames recorded, and
+    /// each topic's messages in time order.
+    fn traced(spec: &TaskSpec, name: &str) -> (TrialReport, usize, BTreeMap<String, Vec<Value>>) {
         let robot = Robot::panda().unwrap();
         let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
-        let spec = task.truth.clone().unwrap();
         let exec = ExecOptions::default();
         let options = BatchOptions {
             trials: 1,
@@ -725,83 +723,65 @@ mod tests {
             seed: 3,
             jobs: 1,
         };
-        let batch = Batch::new(&robot, &task, &spec, &exec, options).unwrap();
+        let batch = Batch::new(&robot, &task, spec, &exec, options).unwrap();
         let (report, timeline) = batch.record(0, TRACE_RATE);
-        let dir = std::env::temp_dir().join(format!("akl-trace-test-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("akl-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("trace.mcap");
         let input = TraceInput {
             robot: &robot,
             world: batch.world(0).unwrap(),
-            spec: &spec,
-            report: &report,
-            timeline: &timeline,
-        };
-        write_trace(&path, &input).unwrap();
-        let bytes = std::fs::read(&path).unwrap();
-        let mut topics: BTreeMap<String, usize> = BTreeMap::new();
-        let mut last = 0;
-        for m in mcap::MessageStream::new(&bytes).unwrap() {
-            let m = m.unwrap();
-            assert!(m.log_time >= last, "messages in time order");
-            last = m.log_time;
-            let value: Value = serde_json::from_slice(&m.data).unwrap();
-            if m.channel.topic == "/keyframes" {
-                assert_eq!(value["entities"][0]["cubes"].as_array().unwrap().len(), 1);
-            }
-            *topics.entry(m.channel.topic.clone()).or_default() += 1;
-        }
-        assert_eq!(topics["/robot"], 1);
-        assert_eq!(topics["/keyframes"], spec.keyframes.len());
-        assert_eq!(topics["/lines"], 1);
-        assert!(topics["/tf"] > 100 && topics["/tf"] + 1 == topics["/objects"]);
-        assert_eq!(topics["/tf"], topics["/joint_states"]);
-        assert_eq!(topics["/tf"], topics["/contacts"]);
-        assert_eq!(topics["/perceived"], 1);
-        assert!(!topics.contains_key("/rejected"));
-        assert!(topics["/events"] >= 3);
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn a_planning_failure_shows_the_worlds_the_tsrs_and_the_rejected_arms() {
-        let robot = Robot::panda().unwrap();
-        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
-        let mut spec = task.truth.clone().unwrap();
-        let last = spec.keyframes.len() - 1;
-        // The part put 3 cm into the shelf: every solution presses it in.
-        spec.keyframes[last].tsr.tw_e.translation.vector.z -= 0.03;
-        let exec = ExecOptions::default();
-        let options = BatchOptions {
-            trials: 1,
-            randomize: true,
-            seed: 3,
-            jobs: 1,
-        };
-        let batch = Batch::new(&robot, &task, &spec, &exec, options).unwrap();
-        let (report, timeline) = batch.record(0, TRACE_RATE);
-        assert!(!report.passed && timeline.frames.is_empty());
-        let dir = std::env::temp_dir().join(format!("akl-trace-plan-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("trace.mcap");
-        let input = TraceInput {
-            robot: &robot,
-            world: batch.world(0).unwrap(),
-            spec: &spec,
+            spec,
             report: &report,
             timeline: &timeline,
         };
         write_trace(&path, &input).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let mut topics: BTreeMap<String, Vec<Value>> = BTreeMap::new();
+        let mut last = 0;
         for m in mcap::MessageStream::new(&bytes).unwrap() {
             let m = m.unwrap();
+            assert!(m.log_time >= last, "messages in time order");
+            last = m.log_time;
             let value: Value = serde_json::from_slice(&m.data).unwrap();
             topics
                 .entry(m.channel.topic.clone())
                 .or_default()
                 .push(value);
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+        (report, timeline.frames.len(), topics)
+    }
+
+    #[test]
+    fn a_trace_holds_every_channel_and_reads_back() {
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let (_, frames, topics) = traced(&spec, "trace");
+        let count = |t: &str| topics.get(t).map_or(0, Vec::len);
+        for k in &topics["/keyframes"] {
+            assert_eq!(k["entities"][0]["cubes"].as_array().unwrap().len(), 1);
+        }
+        assert_eq!(count("/robot"), 1);
+        assert_eq!(count("/keyframes"), spec.keyframes.len());
+        assert_eq!(count("/lines"), 1);
+        assert!(frames > 100 && count("/tf") == frames && count("/objects") == frames + 1);
+        assert_eq!(count("/joint_states"), frames);
+        assert_eq!(count("/contacts"), frames);
+        assert_eq!(count("/perceived"), 1);
+        assert_eq!(count("/rejected"), 0);
+        assert!(count("/events") >= 3);
+    }
+
+    #[test]
+    fn a_planning_failure_shows_the_worlds_the_tsrs_and_the_rejected_arms() {
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let mut spec = task.truth.clone().unwrap();
+        let last = spec.keyframes.len() - 1;
+        // The part put 3 cm into the shelf: every solution presses it in.
+        spec.keyframes[last].tsr.tw_e.translation.vector.z -= 0.03;
+        let (report, frames, topics) = traced(&spec, "trace-plan");
+        assert!(!report.passed && frames == 0);
         assert_eq!(topics["/objects"].len(), 1);
         assert_eq!(topics["/perceived"].len(), 1);
         assert_eq!(topics["/keyframes"].len(), spec.keyframes.len());
@@ -811,6 +791,5 @@ mod tests {
         assert!(label.starts_with("IK 0: "), "{label}");
         let said = topics["/events"][0]["message"].as_str().unwrap();
         assert!(said.starts_with("planning failed: keyframe 3"), "{said}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -206,10 +206,10 @@ pub fn run_trial(
             let started = Instant::now();
             match simulate(setup, world, &plan, timeline) {
                 Some(obs) => judge(setup, &obs, &mut report),
-                None => report.failures.push(Failure {
-                    cause: Cause::NoPlan,
-                    detail: "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link)".into(),
-                }),
+                None => report.failures.push(Failure::new(
+                    Cause::NoPlan,
+                    "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link)",
+                )),
             }
             report.sim_seconds = started.elapsed().as_secs_f64();
         }
@@ -217,10 +217,9 @@ pub fn run_trial(
             if let Some(tl) = timeline {
                 tl.planning_failure = Some(e.to_string());
             }
-            report.failures.push(Failure {
-                cause: plan_cause(&e),
-                detail: e.to_string(),
-            });
+            report
+                .failures
+                .push(Failure::new(plan_cause(&e), e.to_string()));
         }
     }
     report.passed = report.failures.is_empty();

@@ -7,7 +7,8 @@ use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use rapier3d::prelude::{
     ActiveCollisionTypes, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
-    PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, Vector,
+    PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SolverFlags,
+    Vector,
 };
 
 /// Collision group of furniture (fixed objects).
@@ -81,6 +82,33 @@ pub struct SimObject {
     pub collider: ColliderHandle,
 }
 
+/// Pairs of a robot link and an object whose contacts the simulation does not compute: the
+/// pads and the object welded between them, while it is (the weld then carries the whole load,
+/// so its force is what friction must hold). Only colliders with
+/// `ActiveHooks::FILTER_CONTACT_PAIRS` are asked.
+#[derive(Debug, Clone, Default)]
+struct UnsolvedPairs {
+    pairs: Vec<(usize, usize)>,
+}
+
+impl PhysicsHooks for UnsolvedPairs {
+    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
+        let owner = |c| {
+            context
+                .colliders
+                .get(c)
+                .map(|c| Owner::from_user_data(c.user_data))
+        };
+        let skipped = match (owner(context.collider1)?, owner(context.collider2)?) {
+            (Owner::Link(l), Owner::Object(o)) | (Owner::Object(o), Owner::Link(l)) => {
+                self.pairs.contains(&(l, o))
+            }
+            _ => false,
+        };
+        (!skipped).then_some(SolverFlags::COMPUTE_RIGID_IMPULSES)
+    }
+}
+
 /// A rapier world built from an AKL [`World`].
 pub struct SimWorld {
     /// The rapier state; exposed so the arm, grasp and contact modules can reach its parts.
@@ -88,6 +116,7 @@ pub struct SimWorld {
     /// The scene objects, in the task's order.
     pub objects: Vec<SimObject>,
     template: World,
+    unsolved: UnsolvedPairs,
     time: f64,
     dt: f64,
 }
@@ -152,6 +181,7 @@ impl SimWorld {
             physics,
             objects,
             template: world.clone(),
+            unsolved: UnsolvedPairs::default(),
             time: 0.0,
             dt: settings.dt,
         }
@@ -159,7 +189,7 @@ impl SimWorld {
 
     /// Advances the simulation by one time step.
     pub fn step(&mut self) {
-        self.physics.step();
+        self.physics.step_with_events(&self.unsolved, &());
         self.time += self.dt;
     }
 
@@ -171,6 +201,25 @@ impl SimWorld {
     /// The fixed time step (seconds).
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// Stops (`true`) or resumes computing the contacts of robot link `link` with object
+    /// `object`.
+    pub fn set_unsolved(&mut self, link: usize, object: usize, unsolved: bool) {
+        let pair = (link, object);
+        self.unsolved.pairs.retain(|p| *p != pair);
+        if unsolved {
+            self.unsolved.pairs.push(pair);
+        }
+    }
+
+    /// The substeps rapier solves a step in (its solver iterations): a joint's impulses are
+    /// those of the last substep, a contact's the step's total.
+    pub fn substeps(&self) -> usize {
+        self.physics
+            .integration_parameters
+            .num_solver_iterations
+            .max(1)
     }
 
     /// Index of the object named `name`.

@@ -17,8 +17,11 @@ use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::builtin;
 
-/// (keyframe, reference) pairs with the given verdict for the truth of `task`.
-fn verdicts(task: &str) -> (Vec<(usize, String)>, Vec<(usize, String)>) {
+/// Alternatives named by (keyframe, reference).
+type Named = Vec<(usize, String)>;
+
+/// The equivalent and the not-distinguished alternatives of the truth of `task`.
+fn verdicts(task: &str) -> (Named, Named) {
     let robot = Robot::panda().unwrap();
     let t = builtin::task(task).unwrap().unwrap();
     let spec = t.truth.clone().unwrap();
@@ -51,7 +54,7 @@ fn verdicts(task: &str) -> (Vec<(usize, String)>, Vec<(usize, String)>) {
     (equivalent, not_distinguished)
 }
 
-fn pairs(list: &[(usize, &str)]) -> Vec<(usize, String)> {
+fn pairs(list: &[(usize, &str)]) -> Named {
     list.iter().map(|(k, r)| (*k, r.to_string())).collect()
 }
 

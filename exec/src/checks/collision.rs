@@ -1,6 +1,5 @@
 //! Collision check: the contact verdicts gathered during the run (see [`crate::contacts`]).
 
-use super::failure;
 use crate::contacts::Collision;
 use crate::report::{Cause, Failure};
 
@@ -8,6 +7,6 @@ use crate::report::{Cause, Failure};
 pub fn check(collisions: &[Collision]) -> Vec<Failure> {
     collisions
         .iter()
-        .map(|c| failure(Cause::Collision, c.describe()))
+        .map(|c| Failure::new(Cause::Collision, c.describe()))
         .collect()
 }

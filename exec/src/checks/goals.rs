@@ -1,7 +1,6 @@
 //! Goal check: the task's goal predicates on the settled world and the objects' simulated
 //! paths, and every movable object at rest once settled.
 
-use super::failure;
 use crate::report::{Cause, Failure};
 use crate::simulate::observations::Observations;
 use akl_scene::{GoalCheck, Task};
@@ -16,7 +15,7 @@ pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck
     let failures = goals
         .iter()
         .filter(|g| !g.holds)
-        .map(|g| failure(Cause::GoalNotMet, format!("{}: {}", g.goal, g.detail)))
+        .map(|g| Failure::new(Cause::GoalNotMet, format!("{}: {}", g.goal, g.detail)))
         .collect();
     (goals, failures)
 }

@@ -1,7 +1,6 @@
 //! Grasp check: the pads closed on the object the spec closes on, and held it soundly
 //! (see [`crate::grasp`] for what sound means).
 
-use super::failure;
 use crate::report::{Cause, Failure, GraspCheck};
 use crate::simulate::observations::GraspEvent;
 
@@ -35,7 +34,7 @@ pub fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
             )),
         };
         if let Some(why) = why {
-            failures.push(failure(
+            failures.push(Failure::new(
                 Cause::GraspFailed,
                 format!("keyframe {}: {why}", g.keyframe),
             ));

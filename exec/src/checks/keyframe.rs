@@ -7,7 +7,6 @@
 //! grounded on the wrong object misses by the distance that object moved, centimetres under
 //! the task's randomization.
 
-use super::failure;
 use crate::report::{Cause, Failure, KeyframeCheck};
 use crate::simulate::observations::KeyframeReach;
 use akl_tsr::{Bounds, PoseJson, TaskSpec, Tsr};
@@ -48,7 +47,7 @@ pub fn check(
     let mut failures = Vec::new();
     for k in 0..spec.keyframes.len() {
         if !reaches.iter().any(|r| r.keyframe == k) {
-            failures.push(failure(
+            failures.push(Failure::new(
                 Cause::KeyframeMissed,
                 format!("keyframe {k}: the plan never reaches it"),
             ));
@@ -57,7 +56,7 @@ pub fn check(
     for r in reaches {
         let kf = &spec.keyframes[r.keyframe];
         let Some(reference) = r.reference else {
-            failures.push(failure(
+            failures.push(Failure::new(
                 Cause::KeyframeMissed,
                 format!(
                     "keyframe {}: its reference {} is not in the simulation",
@@ -75,7 +74,7 @@ pub fn check(
         let distance = Tsr::new(reference, kf.tsr.tw_e, Bounds(bw)).distance(&r.tcp);
         let reached = distance == 0.0;
         if !reached {
-            failures.push(failure(
+            failures.push(Failure::new(
                 Cause::KeyframeMissed,
                 format!(
                     "keyframe {}: the simulated TCP is {:.1} mm from its TSR grounded on {}'s simulated pose",

@@ -1,7 +1,6 @@
 //! Line check: over each `move_in_line` segment the simulated TCP stays within the tolerance
 //! of the straight line between where it started and where it ended.
 
-use super::failure;
 use crate::report::Cause;
 use crate::report::{Failure, LineCheck};
 use crate::simulate::observations::LinePath;
@@ -22,7 +21,7 @@ pub fn check(lines: &[LinePath], tolerance: f64) -> (Vec<LineCheck>, Vec<Failure
             .fold(0.0, f64::max);
         let within = deviation <= tolerance;
         if !within {
-            failures.push(failure(
+            failures.push(Failure::new(
                 Cause::LineDeviation,
                 format!(
                     "line to keyframe {}: the simulated TCP strays {:.1} mm from the line (tolerance {:.1} mm)",

@@ -1,5 +1,5 @@
 //! The checks of a trial, one per file: each reads what the simulated run measured
-//! ([`Observations`]) and turns it into its report entries and failures. None of them reads
+//! ([`crate::simulate::Observations`]) and turns it into its report entries and failures. None of them reads
 //! the plan's own poses: the plan only says when a keyframe or a line happens.
 
 pub mod collision;
@@ -9,9 +9,3 @@ pub mod keyframe;
 pub mod line;
 pub mod release;
 pub mod slip;
-
-use crate::report::{Cause, Failure};
-
-fn failure(cause: Cause, detail: String) -> Failure {
-    Failure { cause, detail }
-}

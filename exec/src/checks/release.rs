@@ -2,7 +2,6 @@
 //! the drop limit when it is (the height of its bottom when let go above where it came to
 //! rest).
 
-use super::failure;
 use crate::report::{Cause, Failure, ReleaseCheck};
 use crate::simulate::observations::ReleaseEvent;
 
@@ -16,7 +15,7 @@ pub fn check(
     let mut failures: Vec<Failure> = still_held
         .iter()
         .map(|o| {
-            failure(
+            Failure::new(
                 Cause::GoalNotMet,
                 format!("{o} is still in the hand at the end: the spec never releases it"),
             )
@@ -29,7 +28,7 @@ pub fn check(
                 .bottom_at_rest
                 .map_or(0.0, |rest| r.bottom_at_release - rest);
             if fall > drop_limit {
-                failures.push(failure(
+                failures.push(Failure::new(
                     Cause::Dropped,
                     format!(
                         "keyframe {}: {} fell {:.1} cm when let go (limit {:.1} cm)",

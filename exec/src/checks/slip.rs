@@ -1,7 +1,6 @@
 //! Slip check: an object the hand holds moves in the hand by no more than the slip limit
 //! while carried (until the gripper opens).
 
-use super::failure;
 use crate::report::{Cause, Failure};
 use crate::simulate::observations::GraspEvent;
 
@@ -18,7 +17,7 @@ pub fn check(grasps: &[GraspEvent], limit: f64) -> Vec<Failure> {
                 ),
                 None => String::new(),
             };
-            failure(
+            Failure::new(
                 Cause::Slipped,
                 format!(
                     "keyframe {}: {} moved {:.1} mm in the hand (limit {:.1} mm){why}",
