@@ -174,6 +174,7 @@ pub fn settings(options: &ExecOptions, spec: &TaskSpec) -> Settings {
         grasp_overlap: options.grasp.min_overlap,
         contacts: options.contacts,
         settle: options.settle,
+        settle_max: options.settle_max,
     }
 }
 

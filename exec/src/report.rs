@@ -309,6 +309,8 @@ pub struct Settings {
     pub contacts: ContactLimits,
     /// Settling time after the plan (seconds).
     pub settle: f64,
+    /// Longest settling time after the plan, while an object still moves (seconds).
+    pub settle_max: f64,
 }
 
 /// The outcome of a batch of trials of one spec on one task.

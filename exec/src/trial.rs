@@ -39,6 +39,11 @@ pub struct ExecOptions {
     pub drop_limit: f64,
     /// Simulated seconds of settling after the plan, before the goals are checked.
     pub settle: f64,
+    /// Longest settling (simulated seconds after the plan): past `settle`, the simulation goes
+    /// on while an object still moves faster than `rest_speed`, up to this. A part that rocks
+    /// for a moment in a clamp is then judged at rest, as a person would wait for it, while an
+    /// object that never comes to rest still fails the rest check.
+    pub settle_max: f64,
     /// Speed below which an object counts as at rest (m/s; ten times that in rad/s).
     pub rest_speed: f64,
     /// Samples per simulated second of the objects' paths.
@@ -58,6 +63,7 @@ impl Default for ExecOptions {
             slip_limit: 0.005,
             drop_limit: 0.02,
             settle: 0.5,
+            settle_max: 2.0,
             rest_speed: 0.01,
             path_rate: 240.0,
         }

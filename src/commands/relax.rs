@@ -8,7 +8,7 @@ use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
 use akl_scene::builtin;
-use akl_validate::relax::{relax, Relaxation, RelaxOptions, Side};
+use akl_validate::relax::{relax, RelaxOptions, Relaxation, Side};
 use akl_validate::{Trials, ValidateError};
 use serde::Serialize;
 
@@ -49,7 +49,9 @@ pub fn run(args: RelaxArgs) -> CliResult {
         &format!("relaxing on `{}`", task.name),
         options.most_trials(&spec),
     );
-    let relaxation = relax(&robot, &task, &spec, &options, &|done, _| progress.set(done));
+    let relaxation = relax(&robot, &task, &spec, &options, &|done, _| {
+        progress.set(done)
+    });
     progress.finish();
     let relaxation = relaxation.map_err(|e| match e {
         e @ ValidateError::SpecFails(_) => {

@@ -15,7 +15,9 @@ use akl_learn::{Demo, LearnOptions};
 use akl_scene::{builtin, Task};
 use akl_validate::ablation::Ablation;
 use akl_validate::answers::{AnswerVerdict, Answers, DemoSource};
-use akl_validate::{validate, Outcome, Trials, ValidateError, ValidateOptions, Validation, Verdict};
+use akl_validate::{
+    validate, Outcome, Trials, ValidateError, ValidateOptions, Validation, Verdict,
+};
 use serde::Serialize;
 use std::path::Path;
 
@@ -125,9 +127,7 @@ pub fn run(args: ValidateArgs) -> CliResult {
         (
             e @ (ValidateError::Learn(_) | ValidateError::Replay(_) | ValidateError::NoDetector),
             Some(p),
-        ) => {
-            CliError::input(format!("{}: {e}", p.display()))
-        }
+        ) => CliError::input(format!("{}: {e}", p.display())),
         (e, _) => cli_error(e, &args.spec, &task),
     })?;
     if args.json {
@@ -215,9 +215,7 @@ fn print_answers(demo: &Path, answers: &Answers) {
             format!("{:?}", c.answer).to_lowercase(),
             format!("{:?}", c.flipped_to).to_lowercase(),
             c.lines_when_flipped.to_string(),
-            c.outcome
-                .as_ref()
-                .map_or("-".into(), passed_of),
+            c.outcome.as_ref().map_or("-".into(), passed_of),
             verdict.into(),
         ]);
     }

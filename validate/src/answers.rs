@@ -170,7 +170,12 @@ fn relearn(
         &Pace::default(),
     )
     .map_err(|e| ValidateError::Replay(e.to_string()))?;
-    Ok(learn_spec(Method::Akl, &replayed, Some(&task.world), learn)?)
+    Ok(learn_spec(
+        Method::Akl,
+        &replayed,
+        Some(&task.world),
+        learn,
+    )?)
 }
 
 /// Whether two specs have the same keyframes, where in the demonstration they came from

@@ -24,4 +24,4 @@ pub mod validation;
 
 pub use error::ValidateError;
 pub use trials::{Outcome, Trials};
-pub use validation::{validate, Validation, ValidateOptions, Verdict};
+pub use validation::{validate, ValidateOptions, Validation, Verdict};

@@ -246,7 +246,14 @@ pub fn relax(
     let upper = options.most_trials(spec);
     let trials = Cell::new(0);
     let probe = |candidate: &TaskSpec, on: &Trials| -> Result<Outcome, ValidateError> {
-        let outcome = run_trials(robot, task, candidate, &options.exec, on, Stop::AtFirstFailure)?;
+        let outcome = run_trials(
+            robot,
+            task,
+            candidate,
+            &options.exec,
+            on,
+            Stop::AtFirstFailure,
+        )?;
         trials.set(trials.get() + outcome.run);
         progress(trials.get(), upper);
         Ok(outcome)

@@ -101,7 +101,8 @@ impl Outcome {
         for (cause, n) in &report.failures {
             *self.failures.entry(*cause).or_default() += n;
         }
-        self.failed_seeds.extend(report.reports.iter().filter(|r| !r.passed).map(|r| r.seed));
+        self.failed_seeds
+            .extend(report.reports.iter().filter(|r| !r.passed).map(|r| r.seed));
         if self.first_failure.is_none() {
             self.first_failure = report.reports.iter().find(|r| !r.passed).and_then(|r| {
                 r.failures.first().map(|f| TrialFailure {
@@ -229,7 +230,8 @@ mod tests {
         let first = all.first_failure.clone().unwrap();
         assert_eq!(first.seed, 0);
         assert_eq!(all.failed_seeds, vec![0, 1, 2, 3]);
-        let short = run_trials(&robot, &task, &wrong, &exec, &trials, Stop::AtFirstFailure).unwrap();
+        let short =
+            run_trials(&robot, &task, &wrong, &exec, &trials, Stop::AtFirstFailure).unwrap();
         assert_eq!((short.run, short.passed), (1, 0));
         assert_eq!(short.first_failure, Some(first));
         assert!(!short.all_passed());
@@ -252,7 +254,10 @@ mod tests {
 
     #[test]
     fn seeds_split_into_consecutive_runs() {
-        assert_eq!(consecutive(&[3, 4, 5, 9, 10, 12]), vec![&[3, 4, 5][..], &[9, 10], &[12]]);
+        assert_eq!(
+            consecutive(&[3, 4, 5, 9, 10, 12]),
+            vec![&[3, 4, 5][..], &[9, 10], &[12]]
+        );
         assert!(consecutive(&[]).is_empty());
         let trials = Trials {
             count: 3,

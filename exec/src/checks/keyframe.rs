@@ -27,12 +27,12 @@ pub const SIMULATION_SLACK: KeyframeSlack = KeyframeSlack {
 };
 
 impl KeyframeSlack {
-    /// The simulation's slack plus three standard deviations of a perception error of
+    /// The simulation's slack plus four standard deviations of a perception error of
     /// `position` metres and `yaw` radians.
     pub fn with_perception(position: f64, yaw: f64) -> KeyframeSlack {
         KeyframeSlack {
-            position: SIMULATION_SLACK.position + 3.0 * position,
-            angle: SIMULATION_SLACK.angle + 3.0 * yaw,
+            position: SIMULATION_SLACK.position + 4.0 * position,
+            angle: SIMULATION_SLACK.angle + 4.0 * yaw,
         }
     }
 }

@@ -1,7 +1,8 @@
 //! One simulated run of a plan in the true world: the arm's servos follow the timed plan, the
 //! gripper acts when the plan says, contacts are judged every step, and everything the checks
 //! need is measured on the simulated bodies ([`Observations`]). After the plan the objects
-//! settle for [`ExecOptions::settle`] seconds.
+//! settle for [`ExecOptions::settle`] seconds, longer while one still moves (up to
+//! [`ExecOptions::settle_max`]).
 
 mod gripper;
 pub mod observations;
@@ -100,7 +101,8 @@ pub fn simulate(
     let mut reached = vec![false; reaches.len()];
     let mut lines: Vec<Option<LinePath>> = vec![None; plan.segments.len()];
     let dt = sim.dt();
-    let steps = ((plan.duration + options.settle) / dt).ceil() as usize;
+    let settled_from = plan.duration + options.settle;
+    let settle_until = plan.duration + options.settle.max(options.settle_max);
     let path_every = (1.0 / (options.path_rate * dt)).round().max(1.0) as usize;
     let mut square_sum = 0.0;
     let mut tracked = 0usize;
@@ -109,7 +111,7 @@ pub fn simulate(
     if let Some(tl) = timeline.as_deref_mut() {
         tl.plan = Some(plan.clone());
     }
-    for step in 0..=steps {
+    for step in 0.. {
         let t = sim.time();
         gripper.start_due(t + dt - 1e-9, &mut sim, &mut arm, &mut obs);
         for (k, at) in reaches.iter().enumerate() {
@@ -138,7 +140,10 @@ pub fn simulate(
                 next_frame += 1.0 / tl.rate;
             }
         }
-        if step == steps {
+        if t + 0.5 * dt >= settle_until
+            || (t + 0.5 * dt >= settled_from
+                && crate::checks::goals::rest(&object_speeds(&sim), options.rest_speed).holds)
+        {
             break;
         }
         let t_next = t + dt;
@@ -207,18 +212,23 @@ pub fn simulate(
     obs.lines = lines.into_iter().flatten().collect();
     gripper.finish(&sim, &mut obs);
     obs.settled = Some(sim.snapshot());
-    obs.speeds = (0..sim.objects.len())
-        .filter(|&i| sim.objects[i].movable)
-        .map(|i| {
-            let (v, w) = sim.object_speed(i);
-            (sim.objects[i].name.clone(), v, w)
-        })
-        .collect();
+    obs.speeds = object_speeds(&sim);
     obs.simulated = sim.time();
     Some(obs)
 }
 
 /// The simulated TCP and keyframe `k`'s reference object now.
+/// Every movable object's (name, linear speed, angular speed), as the rest check reads them.
+fn object_speeds(sim: &SimWorld) -> Vec<(String, f64, f64)> {
+    (0..sim.objects.len())
+        .filter(|&i| sim.objects[i].movable)
+        .map(|i| {
+            let (v, w) = sim.object_speed(i);
+            (sim.objects[i].name.clone(), v, w)
+        })
+        .collect()
+}
+
 fn reach(setup: &Setup, sim: &SimWorld, arm: &SimArm, k: usize, t: f64) -> KeyframeReach {
     let name = &setup.spec.keyframes[k].reference;
     let reference = if name == WORLD_FRAME {
