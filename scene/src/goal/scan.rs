@@ -331,8 +331,8 @@ mod tests {
     #[test]
     fn passing_beside_a_scanner_fails() {
         let t = task();
-        // 2 cm off the row's centre line: the 5 cm part sticks out of the 8 cm scanners.
-        let paths = path_through(&[START, [0.57, 0.18, 0.2], [0.57, -0.18, 0.2], END], 0.005);
+        // 3 cm off the row's centre line: the 5 cm part sticks out of the 10 cm scanners.
+        let paths = path_through(&[START, [0.58, 0.18, 0.2], [0.58, -0.18, 0.2], END], 0.005);
         let c = scan_goal(&t).check(&t.world, &paths, &t.world);
         assert!(
             !c.holds && c.detail.contains("5.0 mm beyond"),
@@ -372,8 +372,8 @@ mod tests {
     fn a_straight_pass_slanted_across_the_row_fails_for_its_angle() {
         let t = task();
         let pass = |from: [f64; 3], to: [f64; 3]| path_through(&[START, from, to, END], 0.005);
-        // Entirely over every scanner, straight, but 7° across the row.
-        let slanted = pass([0.562, 0.2, 0.2], [0.538, -0.2, 0.2]);
+        // Entirely over every scanner, straight, but 8.5° across the row.
+        let slanted = pass([0.58, 0.2, 0.2], [0.52, -0.2, 0.2]);
         let c = scan_goal(&t).check(&t.world, &slanted, &t.world);
         assert!(
             !c.holds && c.detail.contains("off the row's axis"),
