@@ -1,0 +1,93 @@
+//! Relaxation on a built-in task: what it returns passes fresh seeds, never narrows a bound,
+//! and widens the turn a square block's placement leaves free.
+
+use akl_exec::trial::ExecOptions;
+use akl_planner::Robot;
+use akl_scene::builtin;
+use akl_tsr::pose::pose_from_xyz;
+use akl_validate::relax::{relax, RelaxOptions};
+use akl_validate::trials::{run_trials, Stop};
+use akl_validate::{Trials, ValidateError};
+
+fn options() -> RelaxOptions {
+    RelaxOptions {
+        search: Trials {
+            count: 4,
+            seed: 0,
+            jobs: 2,
+        },
+        verify: Trials {
+            count: 12,
+            seed: 1_000_000,
+            jobs: 2,
+        },
+        depth: 2,
+        exec: ExecOptions::default(),
+        ..RelaxOptions::default()
+    }
+}
+
+#[test]
+fn the_relaxed_spec_passes_fresh_seeds_and_the_placement_turns_freely() {
+    let robot = Robot::panda().unwrap();
+    let task = builtin::task("pick_place").unwrap().unwrap();
+    let truth = task.truth.clone().unwrap();
+    let options = options();
+    let r = relax(&robot, &task, &truth, &options, &|_, _| {}).unwrap();
+    let relaxed = r.relaxed.clone().expect("a verified relaxation");
+    let last = r.verifications.last().unwrap();
+    assert!(last.outcome.all_passed(), "{:?}", last.outcome);
+    for earlier in &r.verifications[..r.verifications.len() - 1] {
+        assert!(!earlier.outcome.all_passed());
+    }
+    // Every verification seed lies outside the search's.
+    let search = options.search.seeds();
+    assert!(r.verifications.iter().all(|v| !search.contains(&v.seed)));
+
+    // Rerun independently on the seeds that verified it, and on seeds neither step used.
+    for seed in [last.seed, 2_000_000] {
+        let fresh = Trials {
+            count: options.verify.count,
+            seed,
+            jobs: 2,
+        };
+        let again =
+            run_trials(&robot, &task, &relaxed, &options.exec, &fresh, Stop::Never).unwrap();
+        assert!(again.all_passed(), "seed {seed}: {:?}", again);
+    }
+
+    // The placement of block_a (keyframe 1, on shelf_2) may turn: the block is square and the
+    // hand lets go of it anyway.
+    // A placement of a square block on the shelf (keyframe 1: block_a, 3: block_b) may turn:
+    // the hand lets go of it either way.
+    let turns = |k: usize| {
+        let [lo, hi] = relaxed.keyframes[k].tsr.bw.0[5];
+        (-lo).max(hi)
+    };
+    assert!(
+        turns(1) > 0.2 || turns(3) > 0.2,
+        "placements turn only {} and {} rad",
+        turns(1),
+        turns(3)
+    );
+    for (k, (a, b)) in truth.keyframes.iter().zip(&relaxed.keyframes).enumerate() {
+        for (axis, ([lo0, hi0], [lo, hi])) in a.tsr.bw.0.iter().zip(b.tsr.bw.0).enumerate() {
+            assert!(
+                lo <= *lo0 && hi >= *hi0,
+                "keyframe {k} axis {axis} narrowed"
+            );
+        }
+    }
+    assert!(r.bits_gained().unwrap() > 0.0, "{:?}", r.bits_gained());
+    assert_eq!(relaxed.method, "truth+relaxed");
+}
+
+#[test]
+fn a_spec_that_fails_its_own_trials_is_not_relaxed() {
+    let robot = Robot::panda().unwrap();
+    let task = builtin::task("pick_place").unwrap().unwrap();
+    let mut spec = task.truth.clone().unwrap();
+    spec.keyframes[3].tsr.tw_e = pose_from_xyz([0.0, 0.3, 0.0]) * spec.keyframes[3].tsr.tw_e;
+    let e = relax(&robot, &task, &spec, &options(), &|_, _| {}).unwrap_err();
+    assert!(matches!(e, ValidateError::SpecFails(_)), "{e}");
+}
