@@ -164,7 +164,7 @@ fn relearn(
         demo,
         header,
         &marked_frames(demo),
-        calibration.clone(),
+        *calibration,
         &mut answers,
         None,
         &Pace::default(),

@@ -267,7 +267,7 @@ pub fn relax(
     let mut relaxed = spec.clone();
     let mut bounds = Vec::with_capacity(bounds_count);
     for k in 0..spec.keyframes.len() {
-        for axis in 0..6 {
+        for (axis, name) in COORDINATE_NAMES.iter().enumerate() {
             for side in [Side::Max, Side::Min] {
                 let from = relaxed.keyframes[k].tsr.bw.0[axis][side.index()];
                 let limit = match side {
@@ -276,7 +276,7 @@ pub fn relax(
                 };
                 let mut search = BoundSearch {
                     keyframe: k,
-                    axis: COORDINATE_NAMES[axis],
+                    axis: name,
                     side,
                     from,
                     to: from,
