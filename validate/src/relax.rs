@@ -21,7 +21,7 @@
 //! [`RelaxOptions::back_offs`] times; if none passes, no relaxed spec is returned.
 //!
 //! **Trial count and depth.** Chosen by measurement on the three ground truths
-//! (`cargo test --release -p akl-validate --test relax_survey -- --ignored --nocapture`,
+//! (`cargo test --release -p akl-validate --test relax relax_survey -- --ignored --nocapture`,
 //! BENCHMARKS.md "Relaxation"): see [`RelaxOptions::default`].
 
 use crate::trials::{run_trials, Outcome, Stop, Trials};
