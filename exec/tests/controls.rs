@@ -291,3 +291,22 @@ fn inspection_without_its_line_fails_its_goal() {
     wrong.keyframes[2].constraint = akl_tsr::Constraint::None;
     rejected_for(&run(&t, &wrong), Cause::GoalNotMet, "scan(part");
 }
+
+/// A positive control: a via-point on the world whose spec stores its frame away from the
+/// world's origin is judged in that frame, where the planner puts it.
+#[test]
+fn a_world_keyframe_is_judged_in_its_stored_frame() {
+    let t = task("pick_place");
+    let mut spec = t.truth.clone().unwrap();
+    let mut via = spec.keyframes[0].clone();
+    via.kind = akl_tsr::KeyframeKind::Constraint;
+    via.reference = akl_tsr::WORLD_FRAME.into();
+    via.tsr.t0_w = akl_tsr::pose::pose_from_xyz([0.32, 0.0, 0.0]);
+    via.tsr.tw_e = akl_tsr::Pose::from_parts(
+        akl_tsr::nalgebra::Translation3::new(0.0, 0.0, 0.33),
+        spec.keyframes[0].tsr.tw_e.rotation,
+    );
+    spec.keyframes.insert(1, via);
+    let report = run(&t, &spec);
+    assert_eq!(report.passed, report.trials, "{:?}", report.failures);
+}

@@ -16,7 +16,7 @@ use akl_planner::collision::Allowances;
 use akl_planner::{Plan, SegmentKind};
 use akl_scene::World;
 use akl_tsr::pose::position_distance;
-use akl_tsr::{Pose, WORLD_FRAME};
+use akl_tsr::WORLD_FRAME;
 use gripper::Gripper;
 pub use observations::Observations;
 use observations::{KeyframeReach, LinePath};
@@ -230,9 +230,12 @@ fn object_speeds(sim: &SimWorld) -> Vec<(String, f64, f64)> {
 }
 
 fn reach(setup: &Setup, sim: &SimWorld, arm: &SimArm, k: usize, t: f64) -> KeyframeReach {
-    let name = &setup.spec.keyframes[k].reference;
+    let keyframe = &setup.spec.keyframes[k];
+    let name = &keyframe.reference;
+    // A keyframe on the world is never re-grounded: its frame is the one the spec stores, as
+    // the planner reads it.
     let reference = if name == WORLD_FRAME {
-        Some(Pose::identity())
+        Some(keyframe.tsr.t0_w)
     } else {
         sim.object_index(name).map(|i| sim.object_pose(i))
     };
