@@ -255,3 +255,72 @@ fn bad_input_exits_2_naming_what_is_wrong() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("demo.jsonl"), "{}", stderr(&o));
 }
+
+/// Teaches pick_place with the straight-moving teacher answering `answers` in `dir`, then
+/// validates the learned spec against its demonstration; returns the JSON and the exit code.
+fn validate_answers(dir: &Path, answers: &str) -> (serde_json::Value, Option<i32>) {
+    let o = akl_in(
+        dir,
+        &[
+            "teach",
+            "--task",
+            "pick_place",
+            "--profile",
+            "straight",
+            "--answers",
+            answers,
+            "-o",
+            "demo.mcap",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = akl_in(
+        dir,
+        &[
+            "validate",
+            "demo.spec.json",
+            "--task",
+            "pick_place",
+            "--demo",
+            "demo.mcap",
+            "--randomize",
+            "4",
+            "--json",
+        ],
+    );
+    (json(&o), o.status.code())
+}
+
+#[test]
+fn a_wrong_yes_is_contradicted_and_a_failing_spec_confirms_nothing() {
+    let dir = scratch("validate-yes");
+    // The straight-moving teacher makes five unintended lines; a "yes" to the fourth alone.
+    let (v, code) = validate_answers(&dir, "no,no,no,yes,no");
+    assert_eq!(code, Some(1));
+    assert_eq!(v["verdict"], "not_minimal", "{v}");
+    let checks = v["answers"]["checks"].as_array().unwrap();
+    let verdicts: Vec<&str> = checks
+        .iter()
+        .map(|c| c["verdict"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        verdicts,
+        [
+            "confirmed",
+            "confirmed",
+            "confirmed",
+            "contradicted",
+            "confirmed"
+        ],
+        "{v}"
+    );
+
+    // A "yes" to the first, a line into the first grasp: the spec passes no trial, so no
+    // trial can confirm any answer.
+    let (v, code) = validate_answers(&dir, "yes,no,no,no,no");
+    assert_eq!(code, Some(1));
+    assert_eq!(v["outcome"]["passed"], 0, "{v}");
+    for c in v["answers"]["checks"].as_array().unwrap() {
+        assert_ne!(c["verdict"], "confirmed", "{c}");
+    }
+}

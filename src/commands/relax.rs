@@ -125,22 +125,12 @@ fn print_relaxation(r: &Relaxed, options: &RelaxOptions) {
         print!("{}", table.render());
     }
     for v in &x.verifications {
-        let narrowed = match v.narrowed.as_slice() {
-            [] => String::new(),
-            [k] => format!("; keyframe {k} narrowed"),
-            all => format!(
-                "; keyframes {} narrowed",
-                all.iter()
-                    .map(usize::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        };
         println!(
-            "verification on fresh seeds {}..: {}/{} passed{}{narrowed}",
+            "verification on fresh seeds {}..: {}/{} passed, {:.0} % of the widening kept{}",
             v.seed,
             v.outcome.passed,
             v.outcome.run,
+            v.kept * 100.0,
             v.outcome
                 .first_failure_text()
                 .map_or(String::new(), |f| format!(" — {f}"))

@@ -206,7 +206,7 @@ fn print_answers(demo: &Path, answers: &Answers) {
                 }
             }
             AnswerVerdict::Confirmed => "confirmed",
-            AnswerVerdict::Inconclusive => "inconclusive: the line does not fix most failures",
+            AnswerVerdict::Inconclusive => "inconclusive: the flip does not fix most failures",
             AnswerVerdict::Unchanged => "unchanged: the flip learns the same spec",
         };
         table.row(vec![

@@ -45,7 +45,9 @@ pub enum AnswerVerdict {
     Contradicted,
     /// The simulation agrees with the answer.
     Confirmed,
-    /// A "no" whose line, restored, turns at most half of the failed trials into passes.
+    /// The flip turns at most half of the failed trials into passes: a "no" whose line,
+    /// restored, does not fix most failures, or a "yes" of a spec that passes no trial, whose
+    /// line dropped does not either.
     Inconclusive,
     /// Flipping the answer learns the same spec.
     Unchanged,
@@ -283,21 +285,42 @@ pub fn check_answers(
                 .into_iter()
                 .filter(|s| !baseline_outcome.failed_seeds.contains(s))
                 .collect();
-            let outcome = run_seeds(
-                robot,
-                task,
-                &flipped,
-                exec,
-                &seeds,
-                trials.jobs,
-                Stop::AtFirstFailure,
-            )?;
-            let verdict = if outcome.all_passed() {
-                AnswerVerdict::Contradicted
+            if seeds.is_empty() {
+                // The spec passed no trial, so none can show the line is needed; dropping it
+                // contradicts the answer only if that turns most of the failures into passes,
+                // as for a "no".
+                let outcome = run_seeds(
+                    robot,
+                    task,
+                    &flipped,
+                    exec,
+                    &trials.seeds(),
+                    trials.jobs,
+                    Stop::Never,
+                )?;
+                let verdict = if 2 * outcome.passed > outcome.run {
+                    AnswerVerdict::Contradicted
+                } else {
+                    AnswerVerdict::Inconclusive
+                };
+                (Some(outcome), verdict)
             } else {
-                AnswerVerdict::Confirmed
-            };
-            (Some(outcome), verdict)
+                let outcome = run_seeds(
+                    robot,
+                    task,
+                    &flipped,
+                    exec,
+                    &seeds,
+                    trials.jobs,
+                    Stop::AtFirstFailure,
+                )?;
+                let verdict = if outcome.all_passed() {
+                    AnswerVerdict::Contradicted
+                } else {
+                    AnswerVerdict::Confirmed
+                };
+                (Some(outcome), verdict)
+            }
         };
         checks.push(AnswerCheck {
             index,
