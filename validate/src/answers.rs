@@ -259,68 +259,33 @@ pub fn check_answers(
             (None, AnswerVerdict::Unchanged)
         } else if answer == Answer::No && baseline_outcome.all_passed() {
             (None, AnswerVerdict::Confirmed)
-        } else if answer == Answer::No {
-            // The line restored, on the trials the spec failed without it: the trials that fail
-            // for reasons the line does not touch fail alike with it (the keyframes both specs
-            // share draw the same goals), so a majority turned into passes is the line's doing.
-            let outcome = run_seeds(
-                robot,
-                task,
-                &flipped,
-                exec,
-                &baseline_outcome.failed_seeds,
-                trials.jobs,
-                Stop::Never,
-            )?;
-            let verdict = if 2 * outcome.passed > outcome.run {
-                AnswerVerdict::Contradicted
-            } else {
-                AnswerVerdict::Inconclusive
-            };
-            (Some(outcome), verdict)
         } else {
-            // The line dropped, judged like a removal on the trials the spec passed with it.
-            let seeds: Vec<u64> = trials
+            // A "no": the line restored, on the trials the spec failed without it. The trials
+            // that fail for reasons the line does not touch fail alike with it (the keyframes
+            // both specs share draw the same goals), so a majority turned into passes is the
+            // line's doing. A "yes" of a spec that passed no trial is judged the same way, the
+            // line dropped: no trial can show the line is needed.
+            // Otherwise a "yes": the line dropped, judged like a removal on the trials the spec
+            // passed with it.
+            let passed: Vec<u64> = trials
                 .seeds()
                 .into_iter()
                 .filter(|s| !baseline_outcome.failed_seeds.contains(s))
                 .collect();
-            if seeds.is_empty() {
-                // The spec passed no trial, so none can show the line is needed; dropping it
-                // contradicts the answer only if that turns most of the failures into passes,
-                // as for a "no".
-                let outcome = run_seeds(
-                    robot,
-                    task,
-                    &flipped,
-                    exec,
-                    &trials.seeds(),
-                    trials.jobs,
-                    Stop::Never,
-                )?;
-                let verdict = if 2 * outcome.passed > outcome.run {
-                    AnswerVerdict::Contradicted
-                } else {
-                    AnswerVerdict::Inconclusive
-                };
-                (Some(outcome), verdict)
+            let on_failures = answer == Answer::No || passed.is_empty();
+            let (seeds, stop) = if on_failures {
+                (&baseline_outcome.failed_seeds, Stop::Never)
             } else {
-                let outcome = run_seeds(
-                    robot,
-                    task,
-                    &flipped,
-                    exec,
-                    &seeds,
-                    trials.jobs,
-                    Stop::AtFirstFailure,
-                )?;
-                let verdict = if outcome.all_passed() {
-                    AnswerVerdict::Contradicted
-                } else {
-                    AnswerVerdict::Confirmed
-                };
-                (Some(outcome), verdict)
-            }
+                (&passed, Stop::AtFirstFailure)
+            };
+            let outcome = run_seeds(robot, task, &flipped, exec, seeds, trials.jobs, stop)?;
+            let verdict = match (on_failures, outcome.all_passed()) {
+                (true, _) if 2 * outcome.passed > outcome.run => AnswerVerdict::Contradicted,
+                (true, _) => AnswerVerdict::Inconclusive,
+                (false, true) => AnswerVerdict::Contradicted,
+                (false, false) => AnswerVerdict::Confirmed,
+            };
+            (Some(outcome), verdict)
         };
         checks.push(AnswerCheck {
             index,
