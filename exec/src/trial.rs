@@ -71,7 +71,7 @@ impl Default for ExecOptions {
 }
 
 impl ExecOptions {
-    /// The slack of the keyframe check: the simulation's plus three standard deviations of
+    /// The slack of the keyframe check: the simulation's plus four standard deviations of
     /// the perception error.
     pub fn keyframe_slack(&self) -> KeyframeSlack {
         KeyframeSlack::with_perception(self.noise.position, self.noise.yaw)
