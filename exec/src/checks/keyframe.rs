@@ -5,7 +5,7 @@
 //! simulation and the servos' residual lag add, plus four standard deviations of the
 //! perception error, since the planner grounded the keyframe on what it perceived. Four, not
 //! three: `akl validate` draws goals up to a region's edge, and there 3σ per axis failed 1 of
-//! 300 pick_place truth trials (a perception error of 6.4 mm along one axis). A keyframe
+//! 300 pick_place truth trials (a perception error of about 7 mm, 3.5σ, along one axis). A keyframe
 //! grounded on the wrong object misses by the distance that object moved, centimetres under
 //! the task's randomization.
 
