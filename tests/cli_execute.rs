@@ -449,3 +449,47 @@ fn has_row(out: &str, label: &str, value: &str) -> bool {
             .is_some_and(|rest| rest.starts_with(' ') && rest.trim() == value)
     })
 }
+
+#[test]
+fn json_failures_name_their_keyframe() {
+    let dir = scratch("execute-failure-keyframes");
+    let spec =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection")))
+            .unwrap();
+    let original: serde_json::Value = serde_json::from_str(&spec).unwrap();
+    // Keyframe 1 out of reach (planning), and the release 6 cm above the shelf (simulation).
+    let mut far = original.clone();
+    far["keyframes"][1]["tsr"]["tw_e"]["p"][0] = serde_json::json!(1.6);
+    let mut high = original;
+    high["keyframes"][3]["tsr"]["tw_e"]["p"][2] = serde_json::json!(0.2);
+    for (name, spec, cause, keyframe) in [
+        ("far.json", far, "unreachable", 1),
+        ("high.json", high, "dropped", 3),
+    ] {
+        std::fs::write(dir.join(name), spec.to_string()).unwrap();
+        let o = akl_in(
+            &dir,
+            &[
+                "execute",
+                name,
+                "--task",
+                "inspection",
+                "--randomize",
+                "1",
+                "--json",
+            ],
+        );
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+        let report = json(&o);
+        let failures = report["reports"][0]["failures"].as_array().unwrap();
+        let named = failures.iter().find(|f| f["cause"] == cause);
+        let named = named.unwrap_or_else(|| panic!("{name}: no {cause} in {failures:?}"));
+        assert_eq!(named["keyframe"], keyframe, "{name}: {named}");
+        for f in failures.iter().filter(|f| f["cause"] == "goal_not_met") {
+            assert!(
+                f.get("keyframe").is_none(),
+                "{name}: a goal names a keyframe: {f}"
+            );
+        }
+    }
+}

@@ -98,6 +98,8 @@ pub struct Collision {
     pub allowed: bool,
     /// The plan step running at the first offending contact, e.g. `free motion to keyframe 2`.
     pub during: String,
+    /// The keyframe that step leads to (`None` while settling).
+    pub keyframe: Option<usize>,
 }
 
 impl Collision {
@@ -174,6 +176,8 @@ pub struct StepContext<'a> {
     pub held: Option<usize>,
     /// The step, in words.
     pub during: &'a str,
+    /// The keyframe the step's segment leads to (`None` while settling).
+    pub keyframe: Option<usize>,
     /// Simulated time.
     pub t: f64,
 }
@@ -370,6 +374,7 @@ impl ContactLog {
                 force,
                 allowed,
                 during: step.during.to_string(),
+                keyframe: step.keyframe,
             }),
         }
     }

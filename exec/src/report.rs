@@ -108,6 +108,10 @@ pub struct Failure {
     pub cause: Cause,
     /// The stage the cause belongs to.
     pub stage: Stage,
+    /// The keyframe it concerns (or the keyframe of the segment it happened in), for scripts
+    /// that group failures; absent for failures of the whole trial (goals, the start).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub keyframe: Option<usize>,
     /// What exactly failed, naming the keyframe, segment or objects.
     pub detail: String,
 }
@@ -118,7 +122,16 @@ impl Failure {
         Failure {
             cause,
             stage: cause.stage(),
+            keyframe: None,
             detail: detail.into(),
+        }
+    }
+
+    /// The same failure, about keyframe `keyframe` (or `None`).
+    pub fn at(self, keyframe: impl Into<Option<usize>>) -> Failure {
+        Failure {
+            keyframe: keyframe.into(),
+            ..self
         }
     }
 }

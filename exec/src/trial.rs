@@ -225,7 +225,7 @@ pub fn run_trial(
             }
             report
                 .failures
-                .push(Failure::new(plan_cause(&e), e.to_string()));
+                .push(Failure::new(plan_cause(&e), e.to_string()).at(e.keyframe()));
         }
     }
     report.passed = report.failures.is_empty();

@@ -79,6 +79,8 @@ pub enum PlanError {
     /// The free-space planner ran out of its iteration budget.
     #[error("segment {segment}: planning budget exhausted ({iterations} RRT-Connect iterations without a connection)")]
     BudgetExhausted {
+        /// The keyframe the segment leads to or leaves.
+        keyframe: usize,
         /// The segment, e.g. `free to keyframe 2`.
         segment: String,
         /// Iterations spent.
@@ -87,6 +89,8 @@ pub enum PlanError {
     /// A straight-line segment cannot be followed.
     #[error("segment {segment}: {reason}")]
     Line {
+        /// The keyframe the segment leads to or leaves.
+        keyframe: usize,
         /// The segment, e.g. `line to keyframe 3`.
         segment: String,
         /// Why: the line leaves the workspace, a joint would jump, or it collides.
@@ -95,6 +99,20 @@ pub enum PlanError {
     /// The start configuration is in collision or outside the joint limits.
     #[error("start configuration: {0}")]
     Start(String),
+}
+
+impl PlanError {
+    /// The keyframe at fault, when the error is about one (or about a segment to or from it).
+    pub fn keyframe(&self) -> Option<usize> {
+        match self {
+            PlanError::Invalid { keyframe, .. }
+            | PlanError::Unreachable { keyframe, .. }
+            | PlanError::NoCollisionFreeIk { keyframe, .. }
+            | PlanError::BudgetExhausted { keyframe, .. }
+            | PlanError::Line { keyframe, .. } => Some(*keyframe),
+            PlanError::Grounding(_) | PlanError::Start(_) => None,
+        }
+    }
 }
 
 fn blocker_text(blocker: &Option<String>) -> String {

@@ -230,8 +230,9 @@ fn centred_in_hand(tcp: &Pose, object: &Pose) -> Pose {
     in_tcp
 }
 
-fn line_error(segment: String, failure: &LineFailure) -> PlanError {
+fn line_error(keyframe: usize, segment: String, failure: &LineFailure) -> PlanError {
     PlanError::Line {
+        keyframe,
         segment,
         reason: failure.to_string(),
     }
@@ -496,7 +497,7 @@ impl<'a> Planner<'a> {
                 let found = found.map(|(_, planned)| planned);
                 match (found, first_failure) {
                     (Some(planned), _) => planned,
-                    (None, Some(failure)) => return Err(line_error(segment, &failure)),
+                    (None, Some(failure)) => return Err(line_error(i, segment, &failure)),
                     (None, None) => {
                         return Err(PlanError::Unreachable {
                             keyframe: i,
@@ -538,7 +539,7 @@ impl<'a> Planner<'a> {
         .allowances();
         let lift = self
             .line_to(&up, &allow)
-            .map_err(|f| line_error(format!("lift before keyframe {i}"), &f))?;
+            .map_err(|f| line_error(i, format!("lift before keyframe {i}"), &f))?;
         if let Some(h) = self.holding.as_mut() {
             h.resting_on = None;
         }
@@ -651,6 +652,7 @@ impl<'a> Planner<'a> {
             }
             RrtResult::Exhausted { iterations } => {
                 return Err(PlanError::BudgetExhausted {
+                    keyframe: i,
                     segment,
                     iterations,
                 })
@@ -917,7 +919,7 @@ impl<'a> Planner<'a> {
             None => {
                 let up = backed_off(&tcp, self.options.approach_distance);
                 self.line_to(&up, &resting)
-                    .map_err(|f| line_error(format!("lift after keyframe {i}"), &f))?
+                    .map_err(|f| line_error(i, format!("lift after keyframe {i}"), &f))?
             }
         };
         if let Some(h) = self.holding.as_mut() {
@@ -988,7 +990,7 @@ impl<'a> Planner<'a> {
             None => {
                 let up = backed_off(&tcp, self.options.approach_distance);
                 self.line_to(&up, &allow)
-                    .map_err(|f| line_error(format!("retreat after keyframe {i}"), &f))?
+                    .map_err(|f| line_error(i, format!("retreat after keyframe {i}"), &f))?
             }
         };
         self.push_line(
@@ -1021,6 +1023,7 @@ impl<'a> Planner<'a> {
             .fold(0.0, f64::max);
         if worst > self.options.line.tolerance {
             return Err(PlanError::Line {
+                keyframe: i,
                 segment: format!("{} at keyframe {i}", segment.kind.name()),
                 reason: format!(
                     "the TCP strays {:.2} mm from the line (tolerance {:.2} mm)",

@@ -7,6 +7,6 @@ use crate::report::{Cause, Failure};
 pub fn check(collisions: &[Collision]) -> Vec<Failure> {
     collisions
         .iter()
-        .map(|c| Failure::new(Cause::Collision, c.describe()))
+        .map(|c| Failure::new(Cause::Collision, c.describe()).at(c.keyframe))
         .collect()
 }

@@ -34,10 +34,13 @@ pub fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
             )),
         };
         if let Some(why) = why {
-            failures.push(Failure::new(
-                Cause::GraspFailed,
-                format!("keyframe {}: {why}", g.keyframe),
-            ));
+            failures.push(
+                Failure::new(
+                    Cause::GraspFailed,
+                    format!("keyframe {}: {why}", g.keyframe),
+                )
+                .at(g.keyframe),
+            );
         }
         checks.push(GraspCheck {
             keyframe: g.keyframe,

@@ -49,22 +49,28 @@ pub fn check(
     let mut failures = Vec::new();
     for k in 0..spec.keyframes.len() {
         if !reaches.iter().any(|r| r.keyframe == k) {
-            failures.push(Failure::new(
-                Cause::KeyframeMissed,
-                format!("keyframe {k}: the plan never reaches it"),
-            ));
+            failures.push(
+                Failure::new(
+                    Cause::KeyframeMissed,
+                    format!("keyframe {k}: the plan never reaches it"),
+                )
+                .at(k),
+            );
         }
     }
     for r in reaches {
         let kf = &spec.keyframes[r.keyframe];
         let Some(reference) = r.reference else {
-            failures.push(Failure::new(
-                Cause::KeyframeMissed,
-                format!(
-                    "keyframe {}: its reference {} is not in the simulation",
-                    r.keyframe, kf.reference
-                ),
-            ));
+            failures.push(
+                Failure::new(
+                    Cause::KeyframeMissed,
+                    format!(
+                        "keyframe {}: its reference {} is not in the simulation",
+                        r.keyframe, kf.reference
+                    ),
+                )
+                .at(r.keyframe),
+            );
             continue;
         };
         let mut bw = kf.tsr.bw.0;
@@ -84,7 +90,7 @@ pub fn check(
                     distance * 1e3,
                     kf.reference
                 ),
-            ));
+            ).at(r.keyframe));
         }
         checks.push(KeyframeCheck {
             keyframe: r.keyframe,

@@ -29,7 +29,7 @@ pub fn check(lines: &[LinePath], tolerance: f64) -> (Vec<LineCheck>, Vec<Failure
                     deviation * 1e3,
                     tolerance * 1e3
                 ),
-            ));
+            ).at(line.keyframe));
         }
         checks.push(LineCheck {
             keyframe: line.keyframe,

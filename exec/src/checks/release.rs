@@ -28,16 +28,19 @@ pub fn check(
                 .bottom_at_rest
                 .map_or(0.0, |rest| r.bottom_at_release - rest);
             if fall > drop_limit {
-                failures.push(Failure::new(
-                    Cause::Dropped,
-                    format!(
-                        "keyframe {}: {} fell {:.1} cm when let go (limit {:.1} cm)",
-                        r.keyframe,
-                        r.object,
-                        fall * 1e2,
-                        drop_limit * 1e2
-                    ),
-                ));
+                failures.push(
+                    Failure::new(
+                        Cause::Dropped,
+                        format!(
+                            "keyframe {}: {} fell {:.1} cm when let go (limit {:.1} cm)",
+                            r.keyframe,
+                            r.object,
+                            fall * 1e2,
+                            drop_limit * 1e2
+                        ),
+                    )
+                    .at(r.keyframe),
+                );
             }
             ReleaseCheck {
                 keyframe: r.keyframe,

@@ -27,6 +27,7 @@ pub fn check(grasps: &[GraspEvent], limit: f64) -> Vec<Failure> {
                     limit * 1e3
                 ),
             )
+            .at(g.keyframe)
         })
         .collect()
 }

@@ -166,14 +166,15 @@ pub fn simulate(
         arm.advance(&mut sim, robot, (&q, &qd), &pads, dt);
         sim.step();
         gripper.after_step(&mut sim, &mut arm, &mut obs);
-        let (allow, during) = match plan.segments.get(seg) {
-            Some(s) if in_plan => (&s.allowed, &labels[seg]),
-            _ => (&nothing, &settle_label),
+        let (allow, during, keyframe) = match plan.segments.get(seg) {
+            Some(s) if in_plan => (&s.allowed, &labels[seg], Some(s.keyframe)),
+            _ => (&nothing, &settle_label, None),
         };
         let context = StepContext {
             allow,
             held: gripper.held(),
             during,
+            keyframe,
             t: t_next,
         };
         let want_points = timeline.is_some();
