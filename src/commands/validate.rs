@@ -246,7 +246,14 @@ fn print_validation(args: &ValidateArgs, task: &Task, v: &Validation) {
     if let Some(f) = o.first_failure_text() {
         println!("  first failure: {f}");
     }
-    println!("without each keyframe and each line, on the same seeds:");
+    let seeds = if o.passed == 0 {
+        "on every seed (the spec passed none)"
+    } else {
+        "on the seeds the spec passed"
+    };
+    println!(
+        "without each keyframe and each line, {seeds}, each run stopped at its first failure:"
+    );
     let mut table = Table::new(["  removed", "passed", "essential", "first failure"]);
     for a in &v.removals {
         let mut row = removal_row(a);
