@@ -1087,3 +1087,64 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod parry_false_positive {
+    use super::*;
+
+    /// A configuration where parry's intersection test alone reports the hand's capsule
+    /// (inflated by half its margin) as touching block_b while it is 2.8 mm away (found by
+    /// the RRT dense re-check with seed 82996): the checker must call it free.
+    #[test]
+    fn a_capsule_millimetres_from_a_box_is_not_a_collision() {
+        let robot = Robot::panda().unwrap();
+        let full = RobotCollision::new(&robot);
+        let m = full.margins;
+        let half = RobotCollision::with_margins(
+            &robot,
+            Margins {
+                arm: m.arm / 2.0,
+                hand: m.hand / 2.0,
+                held: m.held / 2.0,
+                self_: m.self_ / 2.0,
+            },
+        );
+        let world = akl_scene::builtin::task("pick_place")
+            .unwrap()
+            .unwrap()
+            .world;
+        let scene = Scene::new(&world, &[]);
+        let q = [
+            1.649183, 0.854644, -1.19825, -1.952202, -1.082712, 2.778365, -0.502894,
+        ];
+        let checker = Checker::new(&robot, &half, &scene);
+        assert_eq!(
+            checker.check(&q, robot.open_width(), None, &Allowances::default()),
+            None
+        );
+        let n = robot.links().len();
+        let mut poses = vec![Pose::identity(); n];
+        robot
+            .kinematics()
+            .link_poses_into(&q, robot.open_width(), &mut poses);
+        let block = scene
+            .obstacles
+            .iter()
+            .find(|o| o.name == "block_b")
+            .unwrap();
+        let hand = half
+            .bodies
+            .iter()
+            .find(|b| robot.links()[b.link].name == "panda_hand")
+            .unwrap();
+        let at = placed(hand, &(scene.base * poses[hand.link]));
+        let d = parry_convert::distance(&hand.world_shape, &at.pose, &block.shape, &block.pose);
+        assert!(d.unwrap() > 0.002, "{d:?}");
+        assert!(!parry_convert::intersects(
+            &hand.world_shape,
+            &at.pose,
+            &block.shape,
+            &block.pose
+        ));
+    }
+}
