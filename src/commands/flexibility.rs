@@ -10,7 +10,7 @@ use akl_planner::flexibility::{
 };
 use akl_planner::{PlanBudget, PlanOptions};
 use akl_scene::builtin;
-use akl_tsr::{FileError, TaskSpec};
+use akl_tsr::TaskSpec;
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -33,18 +33,11 @@ fn seconds(v: Option<f64>) -> String {
 pub fn run(args: FlexibilityArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
+    let spec = super::load_spec_for(&args.spec, &task)?;
     let in_spec = |e: FlexibilityError| match e {
         FlexibilityError::Scene(_) => CliError::internal(e),
         _ => CliError::input(format!("{}: {e}", args.spec.display())),
     };
-    spec.check_references(task.world.names())
-        .map_err(|source| {
-            CliError::input(FileError {
-                path: args.spec.clone(),
-                source,
-            })
-        })?;
     let workspace = Workspace::new(&robot, &task, &FreedomOptions::default())
         .map_err(|e| CliError::input(format!("task `{}`: {e}", task.name)))?;
     let freedom = workspace.freedom(&spec).map_err(in_spec)?;

@@ -7,7 +7,6 @@ use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
 use akl_planner::{plan_best, GripperAction, PlanBudget, PlanOptions};
 use akl_scene::builtin;
-use akl_tsr::{FileError, TaskSpec};
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -55,14 +54,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     }
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
-    spec.check_references(task.world.names())
-        .map_err(|source| {
-            CliError::input(FileError {
-                path: args.spec.clone(),
-                source,
-            })
-        })?;
+    let spec = super::load_spec_for(&args.spec, &task)?;
     let options = PlanOptions {
         seed: args.seed,
         budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
