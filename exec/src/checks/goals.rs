@@ -25,7 +25,7 @@ pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck
 pub fn rest(speeds: &[(String, f64, f64)], max_speed: f64) -> GoalCheck {
     let moving: Vec<String> = speeds
         .iter()
-        .filter(|(_, v, w)| *v > max_speed || *w > 10.0 * max_speed)
+        .filter(|(_, v, w)| !resting(*v, *w, max_speed))
         .map(|(n, v, w)| format!("{n} ({v:.3} m/s, {w:.2} rad/s)"))
         .collect();
     GoalCheck {
@@ -37,6 +37,12 @@ pub fn rest(speeds: &[(String, f64, f64)], max_speed: f64) -> GoalCheck {
             format!("still moving: {}", moving.join(", "))
         },
     }
+}
+
+/// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check
+/// with `max_speed`.
+pub fn resting(linear: f64, angular: f64, max_speed: f64) -> bool {
+    linear <= max_speed && angular <= 10.0 * max_speed
 }
 
 #[cfg(test)]
