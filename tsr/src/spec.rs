@@ -140,6 +140,14 @@ impl TaskSpec {
         Ok(())
     }
 
+    /// How many segments are `move_in_line`: the constraints a spec asks of the planner.
+    pub fn line_count(&self) -> usize {
+        self.keyframes
+            .iter()
+            .filter(|k| k.constraint == Constraint::MoveInLine)
+            .count()
+    }
+
     /// The distinct reference objects the keyframes are grounded on.
     pub fn references(&self) -> BTreeSet<&str> {
         self.keyframes

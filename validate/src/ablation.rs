@@ -106,11 +106,7 @@ pub fn ablate(
 ) -> Result<Vec<Ablation>, ValidateError> {
     trials.check()?;
     let all = removals(spec);
-    let mut seeds: Vec<u64> = trials
-        .seeds()
-        .into_iter()
-        .filter(|s| !spec_outcome.failed_seeds.contains(s))
-        .collect();
+    let mut seeds = spec_outcome.passed_seeds(trials);
     if seeds.is_empty() {
         seeds = trials.seeds();
     }

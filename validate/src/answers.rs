@@ -34,7 +34,7 @@ use akl_learn::teach::{session_header, stream_demo, Pace};
 use akl_learn::{learn_spec, Answer, Calibration, Demo, DialogueKind, LearnOptions, Method};
 use akl_planner::Robot;
 use akl_scene::Task;
-use akl_tsr::{Constraint, TaskSpec};
+use akl_tsr::TaskSpec;
 use serde::Serialize;
 
 /// What the trials say of one answer.
@@ -95,13 +95,6 @@ impl Answers {
             .iter()
             .filter(|c| c.verdict == AnswerVerdict::Contradicted)
     }
-}
-
-fn lines(spec: &TaskSpec) -> usize {
-    spec.keyframes
-        .iter()
-        .filter(|k| k.constraint == Constraint::MoveInLine)
-        .count()
 }
 
 /// The recorded answers, each with the frame of the query it answered (its own frame when no
@@ -248,6 +241,7 @@ pub fn check_answers(
         })
         .collect();
     debug_assert_eq!(answers.len(), recorded.len());
+    let passed = baseline_outcome.passed_seeds(trials);
     let mut checks = Vec::with_capacity(answers.len());
     for (index, (t, frame, answer)) in answers.iter().copied().enumerate() {
         let flipped_to = match answer {
@@ -267,11 +261,6 @@ pub fn check_answers(
             // line dropped: no trial can show the line is needed.
             // Otherwise a "yes": the line dropped, judged like a removal on the trials the spec
             // passed with it.
-            let passed: Vec<u64> = trials
-                .seeds()
-                .into_iter()
-                .filter(|s| !baseline_outcome.failed_seeds.contains(s))
-                .collect();
             let on_failures = answer == Answer::No || passed.is_empty();
             let (seeds, stop) = if on_failures {
                 (&baseline_outcome.failed_seeds, Stop::Never)
@@ -293,7 +282,7 @@ pub fn check_answers(
             frame,
             answer,
             flipped_to,
-            lines_when_flipped: lines(&flipped),
+            lines_when_flipped: flipped.line_count(),
             outcome,
             verdict,
         });
@@ -301,7 +290,7 @@ pub fn check_answers(
     }
     Ok(Answers {
         spec_is_learned_from_demo: same,
-        lines: lines(&baseline),
+        lines: baseline.line_count(),
         baseline: baseline_outcome,
         checks,
     })

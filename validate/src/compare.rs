@@ -7,7 +7,7 @@ use crate::ValidateError;
 use akl_planner::flexibility::{planner_gains, FreedomOptions, GainOptions, Workspace};
 use akl_planner::{PlanBudget, PlanOptions, Robot};
 use akl_scene::Task;
-use akl_tsr::{Constraint, TaskSpec};
+use akl_tsr::TaskSpec;
 use serde::Serialize;
 
 /// How specs are compared.
@@ -77,11 +77,7 @@ pub fn compare(
             spec: name.clone(),
             method: spec.method.clone(),
             keyframes: spec.keyframes.len(),
-            constraints: spec
-                .keyframes
-                .iter()
-                .filter(|k| k.constraint == Constraint::MoveInLine)
-                .count(),
+            constraints: spec.line_count(),
             bits: workspace.bits(spec)?,
             plan_success: gains.success_rate,
             best_duration: gains.duration.map(|d| d.best),

@@ -83,6 +83,16 @@ impl Outcome {
         self.run > 0 && self.passed == self.run
     }
 
+    /// The seeds of `trials` that did not fail here (all of them that ran and passed, and any
+    /// the run stopped before).
+    pub fn passed_seeds(&self, trials: &Trials) -> Vec<u64> {
+        trials
+            .seeds()
+            .into_iter()
+            .filter(|s| !self.failed_seeds.contains(s))
+            .collect()
+    }
+
     /// Share of the trials run that passed.
     pub fn pass_rate(&self) -> f64 {
         self.passed as f64 / self.run.max(1) as f64

@@ -83,13 +83,7 @@ pub fn validate(
     demo: Option<DemoSource>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Validation, ValidateError> {
-    let answers_count = demo.map_or(0, |d| {
-        d.demo
-            .events
-            .iter()
-            .filter(|e| matches!(e.kind, akl_learn::DialogueKind::Answer(_)))
-            .count()
-    });
+    let answers_count = demo.map_or(0, |d| crate::answers::recorded_answers(d.demo).len());
     let removal_count = crate::ablation::removals(spec).len();
     let total = 1 + removal_count + answers_count;
     let outcome = run_trials(
