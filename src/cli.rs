@@ -421,7 +421,7 @@ pub struct ExecuteArgs {
     pub budget: u64,
     /// Instead of executing the spec, re-ground each keyframe on every other object (and the
     /// world), its offset recomputed so its nominal pose is unchanged, and execute each such
-    /// spec in randomized trials (--randomize N per alternative, default 10): prints, per
+    /// spec in randomized trials (--randomize N per alternative, default 20): prints, per
     /// keyframe, which references the task's randomization tells apart from the spec's (at
     /// least 90 % of trials fail), which are equivalent (held in a fixed relation by the task
     /// or by an earlier placement) and which it cannot tell apart.

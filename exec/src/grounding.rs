@@ -40,10 +40,12 @@ pub struct GroundingOptions {
 }
 
 impl Default for GroundingOptions {
-    /// 10 trials, 9 of which must fail.
+    /// 20 trials, 18 of which must fail. The wrong groundings of the built-in truths fail
+    /// 91–100 % of 100 trials; at 10 trials one in a dozen of those near 93 % shows two passes
+    /// and reads "not distinguished" by chance, at 20 about half as many.
     fn default() -> Self {
         GroundingOptions {
-            trials: 10,
+            trials: 20,
             seed: 0,
             jobs: 1,
             share: 0.9,
@@ -350,11 +352,14 @@ mod tests {
     fn equivalence_follows_the_randomization_and_earlier_placements() {
         let task = builtin::task("pick_place").unwrap().unwrap();
         let spec = task.truth.clone().unwrap();
-        // block_b's release (keyframe 3) on shelf_2 or on block_a, which keyframe 1 put there.
-        let why = equivalence(&task, &spec, 3, "shelf_2", "block_a").unwrap();
+        // block_b's release (keyframe 3) on pad_b or on block_a, which keyframe 1 put on pad_a,
+        // and pad_a moves with pad_b.
+        let why = equivalence(&task, &spec, 3, "pad_b", "block_a").unwrap();
         assert!(why.contains("block_a"), "{why}");
-        assert!(equivalence(&task, &spec, 1, "shelf_2", "block_a").is_none());
-        assert!(equivalence(&task, &spec, 3, "shelf_2", "shelf_1").is_none());
+        assert!(equivalence(&task, &spec, 3, "pad_b", "pad_a").is_some());
+        assert!(equivalence(&task, &spec, 1, "pad_a", "block_a").is_none());
+        assert!(equivalence(&task, &spec, 3, "pad_b", "shelf_2").is_none());
+        assert!(equivalence(&task, &spec, 3, "pad_b", "shelf_1").is_none());
         assert!(equivalence(&task, &spec, 0, "table", WORLD_FRAME).is_some());
         let inspection = builtin::task("inspection").unwrap().unwrap();
         let truth = inspection.truth.clone().unwrap();

@@ -112,8 +112,8 @@ mod tests {
         let mean_square: f64 = (0..n)
             .map(|s| {
                 let seen = perceive(&truth, &noise, s);
-                let d = seen.objects[3].pose.translation.vector
-                    - truth.objects[3].pose.translation.vector;
+                let at = |w: &World| w.object("block_a").unwrap().pose.translation.vector;
+                let d = at(&seen) - at(&truth);
                 d.x * d.x
             })
             .sum::<f64>()

@@ -236,7 +236,8 @@ pub struct TrialReport {
     pub passed: bool,
     /// The checks that failed.
     pub failures: Vec<Failure>,
-    /// Where the randomized objects truly were (world poses): the simulation's placements.
+    /// Where the objects randomization moves truly were (world poses): the movable objects and
+    /// the furniture moved by its own range, its group's or that of what it stands on.
     pub placements: BTreeMap<String, PoseJson>,
     /// Where perception saw the movable objects (world poses): what the planner planned on.
     pub perceived: BTreeMap<String, PoseJson>,

@@ -167,10 +167,11 @@ pub fn run_trial(
 ) -> TrialReport {
     let options = setup.options;
     let perceived = perceive(world, &options.noise, seed);
+    let motion = setup.task.motion().ok();
     let watched = world
         .objects
         .iter()
-        .filter(|o| o.movable || setup.task.randomize.contains_key(&o.name))
+        .filter(|o| o.movable || motion.as_ref().is_some_and(|m| m.moves(&o.name)))
         .map(|o| o.name.as_str());
     let movable = world
         .objects

@@ -164,7 +164,8 @@ fn a_grasp_of_the_wrong_object_fails() {
 }
 
 /// Motors too weak to follow the plan: the simulated TCP lags, and the keyframes and lines
-/// measured on it fail (the checks read the simulated arm, not the plan).
+/// measured on it fail (the checks read the simulated arm, not the plan): every trial fails,
+/// most of them for a keyframe or a line.
 #[test]
 fn motors_too_weak_to_track_miss_keyframes_and_lines() {
     let t = task("inspection");
@@ -185,7 +186,12 @@ fn motors_too_weak_to_track_miss_keyframes_and_lines() {
                 .any(|f| matches!(f.cause, Cause::LineDeviation | Cause::KeyframeMissed))
         })
         .count();
-    assert!(lagging >= 9, "{lagging}: {:?}", report.failures);
+    // The other trials' lagging arm hit something, or closed on nothing, first.
+    assert!(
+        report.passed == 0 && lagging >= 8,
+        "{lagging}: {:?}",
+        report.failures
+    );
     let strays =
         report.reports.iter().flat_map(|r| &r.failures).any(|f| {
             f.cause == Cause::LineDeviation && f.detail.contains("the simulated TCP strays")
@@ -194,28 +200,27 @@ fn motors_too_weak_to_track_miss_keyframes_and_lines() {
 }
 
 /// The thesis' example of a badly chosen reference object (§3.2.4): block_a's placement
-/// grounded on block_b instead of on shelf_2. Where the blocks moved little, block_a still
-/// lands on the shelf (the task asks for the shelf, not a place on it); elsewhere it is set down
-/// off the shelf's edge and falls.
+/// grounded on block_b instead of on its pad. The blocks start on another shelf than the pads
+/// stand on, so block_a is set down beside its pad (or over the shelf's edge, and falls).
 #[test]
 fn a_placement_grounded_on_a_nearby_block_fails_once_the_blocks_move() {
     let t = task("pick_place");
     let mut wrong = t.truth.clone().unwrap();
     let block_b = t.world.object("block_b").unwrap().pose;
     let kf = &mut wrong.keyframes[1];
-    assert_eq!(kf.reference, "shelf_2");
+    assert_eq!(kf.reference, "pad_a");
     kf.tsr.tw_e = block_b.inverse() * kf.tsr.t0_w * kf.tsr.tw_e;
     kf.tsr.t0_w = block_b;
     kf.reference = "block_b".into();
     let report = run(&t, &wrong);
     assert!(
-        report.trials - report.passed >= 7,
+        report.trials - report.passed >= 9,
         "{} passed: {:?}",
         report.passed,
         report.failures
     );
     assert!(
-        report.failures.contains_key(&Cause::Dropped),
+        report.failures.contains_key(&Cause::GoalNotMet),
         "{:?}",
         report.failures
     );
@@ -233,7 +238,8 @@ fn the_assembly_without_its_line_makes_the_pipe_hit_the_clamp() {
 }
 
 /// Only the simulation can find this one: the planner perceived shelf_2 where the task file has
-/// it, but it truly stands 2 cm higher, so the placement presses block_a into it.
+/// it, but it truly stands 2 cm higher (with the pads on it), so the placement presses block_a
+/// into its pad.
 #[test]
 fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
     use akl_exec::simulate::simulate;
@@ -245,8 +251,10 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
     let exec = ExecOptions::default();
     let plan = akl_planner::plan_task(&robot, &spec, &t.world, &exec.plan).unwrap();
     let mut truth = t.world.clone();
-    let shelf = truth.object_mut("shelf_2").unwrap();
-    shelf.pose = Translation3::new(0.0, 0.0, 0.02) * shelf.pose;
+    for name in ["shelf_2", "pad_a", "pad_b"] {
+        let o = truth.object_mut(name).unwrap();
+        o.pose = Translation3::new(0.0, 0.0, 0.02) * o.pose;
+    }
     let setup = Setup {
         robot: &robot,
         task: &t,
@@ -258,7 +266,7 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
         .contacts
         .collisions()
         .iter()
-        .find(|c| c.a == "held block_a" && c.b == "shelf_2")
+        .find(|c| c.a == "held block_a" && c.b == "pad_a")
         .unwrap_or_else(|| panic!("{:?}", obs.contacts.collisions()));
     assert!(
         pressed.allowed && pressed.force > exec.contacts.max_force,

@@ -1,16 +1,13 @@
 //! Grounding sensitivity of the ground truths: every keyframe re-grounded on every other object
-//! (and the world) is either told apart by the randomization (at least 9 of 10 trials fail), or
-//! equivalent (held in a fixed relation), or one of the alternatives listed here, which the
-//! task's goals cannot tell apart from the truth. The lists are asserted, not just printed: a
-//! change that makes the verifier blind to a grounding it used to catch fails this test.
+//! (and the world) is either told apart by the randomization (at least 18 of 20 trials fail)
+//! or equivalent (held in a fixed relation by the task or by an earlier placement). The lists of
+//! equivalent groundings are asserted, not just printed: a change that makes the verifier blind
+//! to a grounding it used to catch fails this test.
 //!
-//! What cannot be told apart, and why (seeds 0–9):
-//! - a release on a shelf grounded on furniture that stands beside it or on the world: the
-//!   object is set down a few centimetres from where the truth puts it, still on the shelf, so
-//!   `on` holds (the task asks for the shelf, not a place on it);
-//! - one end of the inspection's scan line grounded off the scanner row: the line is straight
-//!   and, in layouts where the row moved little, still crosses every scanner along it (the line
-//!   with both ends grounded off the row fails 9 of 10; see `tasks/README.md`).
+//! What makes every wrong grounding fail: each object is put on a 3 cm pad that moves on its
+//! shelf by more than the pad's size (a release grounded on the shelf, the world or anything
+//! else lands off the pad), and the scanner row turns freely and must be crossed from its first
+//! scanner towards its last (a scan line with an end grounded off the row runs across it).
 
 use akl_exec::grounding::{check_groundings, GroundingOptions, Verdict};
 use akl_exec::trial::ExecOptions;
@@ -29,6 +26,7 @@ fn verdicts(task: &str) -> (Named, Named) {
         jobs: 2,
         ..GroundingOptions::default()
     };
+    let must_fail = (options.trials as f64 * options.share).ceil() as usize;
     let measured = check_groundings(
         &robot,
         &t,
@@ -47,7 +45,7 @@ fn verdicts(task: &str) -> (Named, Named) {
                 Verdict::NotDistinguished => {
                     not_distinguished.push((k.keyframe, a.reference.clone()))
                 }
-                Verdict::Distinguished => assert!(a.failed >= 9, "{task}: {a:?}"),
+                Verdict::Distinguished => assert!(a.failed >= must_fail, "{task}: {a:?}"),
             }
         }
     }
@@ -61,19 +59,13 @@ fn pairs(list: &[(usize, &str)]) -> Named {
 #[test]
 fn pick_place_groundings() {
     let (equivalent, not_distinguished) = verdicts("pick_place");
-    // block_b set down beside block_a, which keyframe 1 put on shelf_2.
-    assert_eq!(equivalent, pairs(&[(3, "block_a")]));
+    // The pads move as one group; block_b set down beside block_a, which keyframe 1 put on
+    // pad_a.
     assert_eq!(
-        not_distinguished,
-        pairs(&[
-            (1, "table"),
-            (1, "shelf_1"),
-            (1, "world"),
-            (3, "table"),
-            (3, "shelf_1"),
-            (3, "world"),
-        ])
+        equivalent,
+        pairs(&[(1, "pad_b"), (3, "pad_a"), (3, "block_a")])
     );
+    assert_eq!(not_distinguished, pairs(&[]));
 }
 
 #[test]
@@ -89,24 +81,7 @@ fn inspection_groundings() {
             (2, "scanner_3"),
         ])
     );
-    let off_row = ["table", "shelf_1", "shelf_2", "world"];
-    let mut expected: Vec<(usize, &str)> = Vec::new();
-    for k in [1, 2] {
-        expected.extend(off_row.iter().map(|r| (k, *r)));
-    }
-    expected.extend(
-        [
-            "table",
-            "shelf_1",
-            "scanner_1",
-            "scanner_2",
-            "scanner_3",
-            "world",
-        ]
-        .iter()
-        .map(|r| (3, *r)),
-    );
-    assert_eq!(not_distinguished, pairs(&expected));
+    assert_eq!(not_distinguished, pairs(&[]));
 }
 
 #[test]
@@ -117,17 +92,5 @@ fn assembly_groundings() {
         equivalent,
         pairs(&[(3, "clamp_left"), (3, "clamp_right"), (3, "clamp_top")])
     );
-    assert_eq!(
-        not_distinguished,
-        pairs(&[
-            (1, "table"),
-            (1, "shelf_1"),
-            (1, "rail"),
-            (1, "clamp_left"),
-            (1, "clamp_right"),
-            (1, "clamp_top"),
-            (1, "pipe"),
-            (1, "world"),
-        ])
-    );
+    assert_eq!(not_distinguished, pairs(&[]));
 }

@@ -271,12 +271,21 @@ mod tests {
     #[test]
     fn furniture_out_of_reach_is_rejected() {
         let t = builtin::task("pick_place").unwrap().unwrap();
-        let w = moved(&t.world, "shelf_2", [0.35, 0.0, 0.0]);
-        assert!(matches!(
-            check_layout(&t, &w),
-            Err(Infeasible::OutOfReach { step: 1, .. })
-        ));
-        let w = moved(&t.world, "shelf_2", [-0.35, 0.2, 0.0]);
+        let shelf_2 = |by: [f64; 3]| {
+            ["shelf_2", "pad_a", "pad_b"]
+                .iter()
+                .fold(t.world.clone(), |w, name| moved(&w, name, by))
+        };
+        let w = shelf_2([0.35, 0.0, 0.0]);
+        assert!(
+            matches!(
+                check_layout(&t, &w),
+                Err(Infeasible::OutOfReach { step: 1, .. })
+            ),
+            "{:?}",
+            check_layout(&t, &w)
+        );
+        let w = shelf_2([-0.35, 0.2, 0.0]);
         assert!(
             matches!(check_layout(&t, &w), Err(Infeasible::TooNearBase { .. })),
             "{:?}",

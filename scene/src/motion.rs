@@ -104,6 +104,19 @@ impl Motion {
         mover.carrier.map(|c| self.movers[c].name.as_str())
     }
 
+    /// Whether randomization can move object `name`: its mover, or a mover carrying it, has
+    /// a range.
+    pub fn moves(&self, name: &str) -> bool {
+        let mut mover = self.mover_of.get(name).copied();
+        while let Some(i) = mover {
+            if self.movers[i].range.is_some() {
+                return true;
+            }
+            mover = self.movers[i].carrier;
+        }
+        false
+    }
+
     /// Draws one layout: every mover with a range moved by an offset and turn drawn uniformly
     /// within it, after it has been carried along by its carrier; movers in order, three draws
     /// (x, y, yaw) from `rng` for each that has a range.
@@ -296,6 +309,20 @@ mod tests {
         assert_eq!(motion.carrier_of("block"), Some("shelf_1"));
         assert_eq!(motion.mover_of("clamp_top").unwrap().name, "clamp");
         assert_eq!(motion.carrier_of("rail"), Some("table"));
+    }
+
+    #[test]
+    fn group_members_and_what_rides_on_a_moved_support_are_moved() {
+        let mut t = builtin::task("assembly").unwrap().unwrap();
+        let motion = Motion::of(&t).unwrap();
+        for name in ["clamp_top", "rail", "pipe", "block", "pad"] {
+            assert!(motion.moves(name), "{name}");
+        }
+        assert!(!motion.moves("table"));
+        t.randomize.remove("clamp");
+        t.randomize.remove("pipe");
+        let motion = Motion::of(&t).unwrap();
+        assert!(!motion.moves("clamp_top") && !motion.moves("pipe"));
     }
 
     #[test]

@@ -66,12 +66,14 @@ pub enum Goal {
         #[serde(default = "default_depth")]
         max_depth: f64,
     },
-    /// `object` was carried over the row of `scanners` in a straight line: during the
-    /// execution it passed entirely over every scanner (its outline seen from above inside the
-    /// scanner's) with its bottom between `height[0]` and `height[1]` above the scanner's top,
-    /// and its path from the first such moment to the last stayed within `max_deviation` of a
-    /// straight line which, seen from above, runs along the row (within `max_angle` of the line
-    /// through the first and last scanners' centres), as a row of scanners scans.
+    /// `object` was carried over the row of `scanners` in a straight line, in their order: some
+    /// stretch of its path passed entirely over every scanner (its outline seen from above
+    /// inside the scanner's) with its bottom between `height[0]` and `height[1]` above the
+    /// scanner's top, and that stretch stayed within `max_deviation` of a straight line which,
+    /// seen from above, heads from the first scanner towards the last (within `max_angle` of
+    /// the direction from the first scanner's centre to the last's), as a row of scanners
+    /// scans. The stretch judged is a shortest one that crosses them all, so a free motion over
+    /// one scanner before or after the pass is not part of it.
     Scan {
         /// The object scanned.
         object: String,
@@ -83,7 +85,7 @@ pub enum Goal {
         /// How far (metres) the object's path over the row may leave a straight line.
         #[serde(default = "default_deviation")]
         max_deviation: f64,
-        /// How far (radians) that line may turn from the row's axis, seen from above.
+        /// How far (radians) that line may turn from the row's direction, seen from above.
         #[serde(default = "default_row_angle")]
         max_angle: f64,
     },

@@ -111,13 +111,15 @@ mod tests {
     use crate::{Goal, World};
     use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
 
-    /// pick_place's end state as intended: both blocks where the teaching puts them.
+    /// pick_place's end state as intended: both blocks where the teaching puts them, on
+    /// their pads.
     fn placed() -> (crate::Task, World) {
         let t = builtin::task("pick_place").unwrap().unwrap();
         let mut w = t.world.clone();
-        let shelf = w.object("shelf_2").unwrap().pose;
-        w.object_mut("block_a").unwrap().pose = shelf * pose_from_xyz([-0.04, 0.06, 0.11]);
-        w.object_mut("block_b").unwrap().pose = shelf * pose_from_xyz([0.05, -0.05, 0.11]);
+        for (block, pad) in [("block_a", "pad_a"), ("block_b", "pad_b")] {
+            let pad = w.object(pad).unwrap().pose;
+            w.object_mut(block).unwrap().pose = pad * pose_from_xyz([0.0, 0.0, 0.0425]);
+        }
         (t, w)
     }
 
@@ -131,7 +133,7 @@ mod tests {
     }
 
     #[test]
-    fn pick_place_holds_with_both_blocks_upright_on_the_second_shelf() {
+    fn pick_place_holds_with_both_blocks_upright_on_their_pads() {
         let (t, w) = placed();
         assert!(failing(&t, &w).is_empty(), "{:?}", failing(&t, &w));
         // Turned about the vertical is still upright.
@@ -145,25 +147,31 @@ mod tests {
     fn a_tilted_block_fails_for_its_tilt() {
         let (t, mut w) = placed();
         let b = w.object_mut("block_b").unwrap();
-        // Leaning 0.3 rad on an edge: the bottom still touches the shelf.
+        // Leaning 0.3 rad on an edge: the bottom still touches the pad.
         b.pose *= pose_from_xyz_rpy([0.0; 3], [0.3, 0.0, 0.0]);
-        b.pose.translation.z = 0.14 + b.shape.world_half_extents(&b.pose).z;
+        b.pose.translation.z = 0.145 + b.shape.world_half_extents(&b.pose).z;
         let f = failing(&t, &w);
         assert_eq!(f.len(), 1, "{f:?}");
         assert!(
-            f[0].starts_with("on(block_b, shelf_2)") && f[0].contains("tilted"),
+            f[0].starts_with("on(block_b, pad_b)") && f[0].contains("tilted"),
             "{f:?}"
         );
     }
 
     #[test]
-    fn a_block_on_the_wrong_shelf_fails() {
+    fn a_block_beside_its_pad_or_on_the_wrong_shelf_fails() {
         let (t, mut w) = placed();
         let shelf_1 = t.world.object("shelf_1").unwrap().pose;
         w.object_mut("block_a").unwrap().pose = shelf_1 * pose_from_xyz([0.0, 0.0, 0.11]);
+        // On the right shelf, 2 cm from its pad: its centre is off the 3 cm pad.
+        let pad_b = t.world.object("pad_b").unwrap().pose;
+        w.object_mut("block_b").unwrap().pose = pad_b * pose_from_xyz([0.02, 0.0, 0.0425]);
         let f = failing(&t, &w);
         assert!(
-            f.len() == 1 && f[0].starts_with("on(block_a, shelf_2)") && f[0].contains("not above"),
+            f.len() == 2
+                && f[0].starts_with("on(block_a, pad_a)")
+                && f[1].starts_with("on(block_b, pad_b)")
+                && f.iter().all(|f| f.contains("not above")),
             "{f:?}"
         );
     }
@@ -172,12 +180,18 @@ mod tests {
     fn blocks_pressed_into_each_other_fail_and_touching_ones_pass() {
         let (t, mut w) = placed();
         let a = w.object("block_a").unwrap().pose;
+        let apart = |w: &World| -> Vec<String> {
+            failing(&t, w)
+                .into_iter()
+                .filter(|f| f.starts_with("apart"))
+                .collect()
+        };
         // Side by side along x, faces touching: allowed.
         w.object_mut("block_b").unwrap().pose = pose_from_xyz([0.05, 0.0, 0.0]) * a;
-        assert!(failing(&t, &w).is_empty(), "{:?}", failing(&t, &w));
+        assert!(apart(&w).is_empty(), "{:?}", apart(&w));
         // 3 mm into each other: the goal names the depth.
         w.object_mut("block_b").unwrap().pose = pose_from_xyz([0.047, 0.0, 0.0]) * a;
-        let f = failing(&t, &w);
+        let f = apart(&w);
         assert!(
             f.len() == 1 && f[0].starts_with("apart(block_a, block_b)") && f[0].contains("3.0 mm"),
             "{f:?}"

@@ -1,5 +1,5 @@
-//! The `scan` goal: an object carried over a row of scanners in a straight line, judged on
-//! the path the object took.
+//! The `scan` goal: an object carried over a row of scanners in a straight line, in the row's
+//! order, judged on the path the object took.
 
 use super::find;
 use crate::paths::{ObjectPaths, PathSample};
@@ -101,12 +101,12 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
         };
         scanners.len()
     ];
-    let mut pass: Option<(usize, usize)> = None;
+    let mut crossings: Vec<(usize, usize)> = Vec::new();
     for (i, pose) in path.iter().enumerate() {
         // The outline's corners are only needed while the centre is over a scanner (the
         // largest corner excess is never below the centre's, the excess being convex).
         let mut corners = None;
-        for (s, seen) in scanners.iter().zip(seen.iter_mut()) {
+        for (k, (s, seen)) in scanners.iter().zip(seen.iter_mut()).enumerate() {
             let centre = s
                 .shape
                 .outline_excess_of(&s.pose, &[pose.translation.vector.into()]);
@@ -129,7 +129,7 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
             }
             if (lo..=hi).contains(&h) {
                 seen.crossed = true;
-                pass = Some(pass.map_or((i, i), |(first, _)| (first, i)));
+                crossings.push((i, k));
             }
         }
     }
@@ -154,36 +154,88 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
             ),
         });
     }
-    let Some((first, last)) = pass else {
-        return Err(format!("{object} passed over no scanner"));
-    };
-    let over_row: Vec<Vector3<f64>> = path[first..=last]
-        .iter()
-        .map(|p| p.translation.vector)
-        .collect();
-    let (deviation, direction) = fit_line(&over_row);
-    let length = (over_row[over_row.len() - 1] - over_row[0]).norm();
-    if deviation > scan.max_deviation {
-        return Err(format!(
-            "{object}'s path over the row leaves a straight line by {:.1} mm (at most {:.1} mm allowed)",
-            deviation * 1e3,
-            scan.max_deviation * 1e3
-        ));
+    // Every shortest stretch of the path over the whole row is a candidate pass; the goal
+    // holds if one of them is straight and runs along the row. Taking the shortest stretches
+    // keeps a free motion that also happens over a scanner at scan height, before or after
+    // the pass, out of the pass.
+    let mut straightest: Option<(f64, f64, f64)> = None;
+    let mut best_aligned: Option<(f64, f64, f64)> = None;
+    for (first, last) in sweeps(&crossings, scanners.len()) {
+        let over_row: Vec<Vector3<f64>> = path[first..=last]
+            .iter()
+            .map(|p| p.translation.vector)
+            .collect();
+        let travel = over_row[over_row.len() - 1] - over_row[0];
+        let (deviation, direction) = fit_line(&over_row);
+        let heading = if direction.dot(&travel) < 0.0 {
+            -direction
+        } else {
+            direction
+        };
+        let angle = angle_to_row(&heading, &scanners);
+        let length = travel.norm();
+        if deviation <= scan.max_deviation && angle <= scan.max_angle {
+            return Ok(format!(
+                "passed over {} scanners; path over the row {:.1} mm from straight over {length:.3} m, {:.1}° off the row",
+                scanners.len(),
+                deviation * 1e3,
+                angle.to_degrees()
+            ));
+        }
+        let candidate = Some((deviation, angle, length));
+        if straightest.is_none_or(|(d, _, _)| deviation < d) {
+            straightest = candidate;
+        }
+        if deviation <= scan.max_deviation && best_aligned.is_none_or(|(_, a, _)| angle < a) {
+            best_aligned = candidate;
+        }
     }
-    let angle = angle_to_row(&direction, &scanners);
-    if angle > scan.max_angle {
-        return Err(format!(
+    Err(match (best_aligned, straightest) {
+        (Some((_, angle, _)), _) if angle > std::f64::consts::FRAC_PI_2 => format!(
+            "{object} crossed the row from its last scanner towards its first, {:.1}° from the \
+             row's direction (the scanners are crossed in the order the goal lists them)",
+            angle.to_degrees()
+        ),
+        (Some((_, angle, _)), _) => format!(
             "{object}'s path over the row runs {:.1}° off the row's axis (at most {:.1}° allowed)",
             angle.to_degrees(),
             scan.max_angle.to_degrees()
-        ));
+        ),
+        (None, Some((deviation, _, _))) => format!(
+            "{object}'s path over the row leaves a straight line by {:.1} mm (at most {:.1} mm allowed)",
+            deviation * 1e3,
+            scan.max_deviation * 1e3
+        ),
+        (None, None) => format!("{object} passed over no scanner"),
+    })
+}
+
+/// The shortest stretches of a path that cross every one of `scanners` scanners, as (first,
+/// last) sample indices, from `crossings`: the (sample, scanner) pairs, in path order, at which
+/// the object was entirely over a scanner at scan height. A stretch is shortest when dropping
+/// its first or its last crossing would leave a scanner uncrossed.
+fn sweeps(crossings: &[(usize, usize)], scanners: usize) -> Vec<(usize, usize)> {
+    let mut count = vec![0usize; scanners];
+    let mut covered = 0;
+    let mut start = 0;
+    let mut out = Vec::new();
+    for &(sample, scanner) in crossings {
+        if count[scanner] == 0 {
+            covered += 1;
+        }
+        count[scanner] += 1;
+        if covered < scanners {
+            continue;
+        }
+        while count[crossings[start].1] > 1 {
+            count[crossings[start].1] -= 1;
+            start += 1;
+        }
+        if count[scanner] == 1 {
+            out.push((crossings[start].0, sample));
+        }
     }
-    Ok(format!(
-        "passed over {} scanners; path over the row {:.1} mm from straight over {length:.3} m, {:.1}° off the row",
-        scanners.len(),
-        deviation * 1e3,
-        angle.to_degrees()
-    ))
+    out
 }
 
 /// The path's poses with poses interpolated between samples at most [`FILL_STEP`] apart.
@@ -234,8 +286,9 @@ fn fit_line(points: &[Vector3<f64>]) -> (f64, Vector3<f64>) {
     (deviation, direction)
 }
 
-/// The angle (radians) between `direction` and the row's axis (from the first scanner's centre
-/// to the last's), both seen from above; 0 for a row of one scanner.
+/// The angle (radians, 0 to π) between the heading `direction` and the row's direction (from
+/// the first scanner's centre to the last's), both seen from above: a pass in the listed order
+/// runs near 0, one in the reverse order near π. 0 for a row of one scanner.
 fn angle_to_row(direction: &Vector3<f64>, scanners: &[&Object]) -> f64 {
     let (Some(first), Some(last)) = (scanners.first(), scanners.last()) else {
         return 0.0;
@@ -243,7 +296,7 @@ fn angle_to_row(direction: &Vector3<f64>, scanners: &[&Object]) -> f64 {
     let flat = |v: Vector3<f64>| Vector3::new(v.x, v.y, 0.0).try_normalize(1e-12);
     let row = flat(last.pose.translation.vector - first.pose.translation.vector);
     match (row, flat(*direction)) {
-        (Some(row), Some(path)) => row.dot(&path).abs().clamp(0.0, 1.0).acos(),
+        (Some(row), Some(path)) => row.dot(&path).clamp(-1.0, 1.0).acos(),
         _ => 0.0,
     }
 }
@@ -369,6 +422,52 @@ mod tests {
     }
 
     #[test]
+    fn a_free_motion_over_a_scanner_before_the_pass_is_not_part_of_it() {
+        let t = task();
+        // Over scanner_3 at scan height first, away, then one straight pass over the row.
+        let paths = path_through(
+            &[
+                START,
+                [0.55, -0.1, 0.2],
+                [0.4, 0.1, 0.3],
+                [0.55, 0.18, 0.2],
+                [0.55, -0.18, 0.2],
+                END,
+            ],
+            0.005,
+        );
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(c.holds, "{}", c.detail);
+        // Without the straight pass, the scanners crossed one by one do not make a scan.
+        let paths = path_through(
+            &[
+                START,
+                [0.55, 0.1, 0.2],
+                [0.4, 0.0, 0.3],
+                [0.55, 0.0, 0.2],
+                [0.4, -0.1, 0.3],
+                [0.55, -0.1, 0.2],
+                END,
+            ],
+            0.005,
+        );
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(
+            !c.holds && c.detail.contains("leaves a straight line"),
+            "{}",
+            c.detail
+        );
+    }
+
+    #[test]
+    fn the_shortest_stretches_over_every_scanner_are_found() {
+        let crossings = [(0, 0), (1, 0), (5, 1), (9, 2), (10, 2), (20, 0)];
+        assert_eq!(sweeps(&crossings, 3), vec![(1, 9), (5, 20)]);
+        assert_eq!(sweeps(&crossings[..3], 3), vec![]);
+        assert_eq!(sweeps(&[(4, 0), (7, 0)], 1), vec![(4, 4), (7, 7)]);
+    }
+
+    #[test]
     fn a_straight_pass_slanted_across_the_row_fails_for_its_angle() {
         let t = task();
         let pass = |from: [f64; 3], to: [f64; 3]| path_through(&[START, from, to, END], 0.005);
@@ -384,6 +483,19 @@ mod tests {
         let nearly = pass([0.556, 0.2, 0.2], [0.544, -0.2, 0.2]);
         let c = scan_goal(&t).check(&t.world, &nearly, &t.world);
         assert!(c.holds, "{}", c.detail);
+    }
+
+    #[test]
+    fn a_pass_in_the_reverse_order_fails_for_its_direction() {
+        let t = task();
+        // From scanner_3 to scanner_1, straight and along the row.
+        let paths = path_through(&[END, [0.55, -0.18, 0.2], [0.55, 0.18, 0.2], START], 0.005);
+        let c = scan_goal(&t).check(&t.world, &paths, &t.world);
+        assert!(
+            !c.holds && c.detail.contains("from its last scanner towards its first"),
+            "{}",
+            c.detail
+        );
     }
 
     #[test]
