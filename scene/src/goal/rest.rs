@@ -31,7 +31,13 @@ pub(super) fn on(
         return Err(format!("{object} is {dz:+.3} m from the top of {support}"));
     }
     if !s.shape.outline_contains(local.x, local.y, 0.0) {
-        return Err(format!("{object}'s centre is not above {support}"));
+        let beyond = s
+            .shape
+            .outline_excess_of(&s.pose, &[o.pose.translation.vector.into()]);
+        return Err(format!(
+            "{object}'s centre is not above {support}: {:.1} mm beyond its outline",
+            beyond * 1e3
+        ));
     }
     if tilt > max_tilt {
         return Err(format!(
