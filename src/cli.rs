@@ -113,7 +113,7 @@ pub enum Command {
     /// that failed (--depth steps). Each probe runs --trials randomized trials with goals drawn
     /// within the part of the region it adds. The relaxed spec is then re-verified in --verify
     /// trials on seeds the search never used (from SEED + 1,000,000); if a trial fails, the
-    /// widening is halved and verified again on new seeds, twice at most. Prints every bound
+    /// widening is halved and verified again on new seeds, four times at most. Prints every bound
     /// that moved and the bits of freedom gained (see `akl flexibility`).
     ///
     /// Exit codes: 0 the relaxed spec passed its verification and was written (atomically);

@@ -32,7 +32,7 @@ fn task_show_prints_objects_goals_and_steps() {
     assert!(
         out.contains("scanner_2")
             && out.contains("scan(part over scanner_1, scanner_2, scanner_3)")
-            && out.contains("on(part, pad)")
+            && out.contains("on(part, mat)")
             && out.contains("straight line"),
         "{out}"
     );

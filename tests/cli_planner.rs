@@ -272,7 +272,7 @@ fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
         "/tasks/inspection.truth.json"
     ))
     .unwrap();
-    let far = text.replacen("\"p\": [0.0, 0.0, 0.0725]", "\"p\": [2.0, 0.0, 0.0725]", 1);
+    let far = text.replacen("\"p\": [0.0, 0.0, 0.0705]", "\"p\": [2.0, 0.0, 0.0705]", 1);
     assert_ne!(far, text);
     let spec = dir.join("far.json");
     std::fs::write(&spec, far).unwrap();

@@ -352,14 +352,14 @@ mod tests {
     fn equivalence_follows_the_randomization_and_earlier_placements() {
         let task = builtin::task("pick_place").unwrap().unwrap();
         let spec = task.truth.clone().unwrap();
-        // block_b's release (keyframe 3) on pad_b or on block_a, which keyframe 1 put on pad_a,
-        // and pad_a moves with pad_b.
-        let why = equivalence(&task, &spec, 3, "pad_b", "block_a").unwrap();
+        // block_b's release (keyframe 3) on mat_b or on block_a, which keyframe 1 put on mat_a,
+        // and mat_a moves with mat_b.
+        let why = equivalence(&task, &spec, 3, "mat_b", "block_a").unwrap();
         assert!(why.contains("block_a"), "{why}");
-        assert!(equivalence(&task, &spec, 3, "pad_b", "pad_a").is_some());
-        assert!(equivalence(&task, &spec, 1, "pad_a", "block_a").is_none());
-        assert!(equivalence(&task, &spec, 3, "pad_b", "shelf_2").is_none());
-        assert!(equivalence(&task, &spec, 3, "pad_b", "shelf_1").is_none());
+        assert!(equivalence(&task, &spec, 3, "mat_b", "mat_a").is_some());
+        assert!(equivalence(&task, &spec, 1, "mat_a", "block_a").is_none());
+        assert!(equivalence(&task, &spec, 3, "mat_b", "shelf_2").is_none());
+        assert!(equivalence(&task, &spec, 3, "mat_b", "shelf_1").is_none());
         assert!(equivalence(&task, &spec, 0, "table", WORLD_FRAME).is_some());
         let inspection = builtin::task("inspection").unwrap().unwrap();
         let truth = inspection.truth.clone().unwrap();

@@ -200,15 +200,15 @@ fn motors_too_weak_to_track_miss_keyframes_and_lines() {
 }
 
 /// The thesis' example of a badly chosen reference object (§3.2.4): block_a's placement
-/// grounded on block_b instead of on its pad. The blocks start on another shelf than the pads
-/// stand on, so block_a is set down beside its pad (or over the shelf's edge, and falls).
+/// grounded on block_b instead of on its mat. The blocks start on another shelf than the mats
+/// stand on, so block_a is set down beside its mat (or over the shelf's edge, and falls).
 #[test]
 fn a_placement_grounded_on_a_nearby_block_fails_once_the_blocks_move() {
     let t = task("pick_place");
     let mut wrong = t.truth.clone().unwrap();
     let block_b = t.world.object("block_b").unwrap().pose;
     let kf = &mut wrong.keyframes[1];
-    assert_eq!(kf.reference, "pad_a");
+    assert_eq!(kf.reference, "mat_a");
     kf.tsr.tw_e = block_b.inverse() * kf.tsr.t0_w * kf.tsr.tw_e;
     kf.tsr.t0_w = block_b;
     kf.reference = "block_b".into();
@@ -238,8 +238,9 @@ fn the_assembly_without_its_line_makes_the_pipe_hit_the_clamp() {
 }
 
 /// Only the simulation can find this one: the planner perceived shelf_2 where the task file has
-/// it, but it truly stands 2 cm higher (with the pads on it), so the placement presses block_a
-/// into its pad.
+/// it, but it truly stands 2 cm higher (with the mats on it), so the placement pushes block_a
+/// into its mat: harder than the contact limit, or until the grasp gives way and the block
+/// slides in the hand.
 #[test]
 fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
     use akl_exec::simulate::simulate;
@@ -251,7 +252,7 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
     let exec = ExecOptions::default();
     let plan = akl_planner::plan_task(&robot, &spec, &t.world, &exec.plan).unwrap();
     let mut truth = t.world.clone();
-    for name in ["shelf_2", "pad_a", "pad_b"] {
+    for name in ["shelf_2", "mat_a", "mat_b"] {
         let o = truth.object_mut(name).unwrap();
         o.pose = Translation3::new(0.0, 0.0, 0.02) * o.pose;
     }
@@ -262,21 +263,26 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
         options: &exec,
     };
     let obs = simulate(&setup, &truth, &plan, None).unwrap();
-    let pressed = obs
-        .contacts
-        .collisions()
-        .iter()
-        .find(|c| c.a == "held block_a" && c.b == "pad_a")
-        .unwrap_or_else(|| panic!("{:?}", obs.contacts.collisions()));
+    let pressed = obs.contacts.collisions().iter().any(|c| {
+        c.a == "held block_a" && c.b == "mat_a" && c.allowed && c.force > exec.contacts.max_force
+    });
+    let gave_way = obs.grasps[0].broke_at.is_some() && obs.grasps[0].slip > exec.slip_limit;
     assert!(
-        pressed.allowed && pressed.force > exec.contacts.max_force,
-        "{pressed:?}"
+        pressed || gave_way,
+        "{:?} {:?}",
+        obs.contacts.collisions(),
+        obs.grasps[0]
     );
     let nominal = simulate(&setup, &t.world, &plan, None).unwrap();
     assert!(
         nominal.contacts.collisions().is_empty(),
         "{:?}",
         nominal.contacts.collisions()
+    );
+    assert!(
+        nominal.grasps[0].slip < exec.slip_limit,
+        "{:?}",
+        nominal.grasps[0]
     );
 }
 

@@ -4,9 +4,9 @@
 //! equivalent groundings are asserted, not just printed: a change that makes the verifier blind
 //! to a grounding it used to catch fails this test.
 //!
-//! What makes every wrong grounding fail: each object is put on a 3 cm pad that moves on its
-//! shelf by more than the pad's size (a release grounded on the shelf, the world or anything
-//! else lands off the pad), and the scanner row turns freely and must be crossed from its first
+//! What makes every wrong grounding fail: each object is put on a 4 cm mat that moves on its
+//! shelf by more than the mat's size (a release grounded on the shelf, the world or anything
+//! else lands off the mat), and the scanner row turns freely and must be crossed from its first
 //! scanner towards its last (a scan line with an end grounded off the row runs across it).
 
 use akl_exec::grounding::{check_groundings, GroundingOptions, Verdict};
@@ -59,11 +59,11 @@ fn pairs(list: &[(usize, &str)]) -> Named {
 #[test]
 fn pick_place_groundings() {
     let (equivalent, not_distinguished) = verdicts("pick_place");
-    // The pads move as one group; block_b set down beside block_a, which keyframe 1 put on
-    // pad_a.
+    // The mats move as one group; block_b set down beside block_a, which keyframe 1 put on
+    // mat_a.
     assert_eq!(
         equivalent,
-        pairs(&[(1, "pad_b"), (3, "pad_a"), (3, "block_a")])
+        pairs(&[(1, "mat_b"), (3, "mat_a"), (3, "block_a")])
     );
     assert_eq!(not_distinguished, pairs(&[]));
 }

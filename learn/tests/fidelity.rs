@@ -337,7 +337,7 @@ fn a_release_far_from_everything_is_grounded_on_the_world() {
 }
 
 /// The built-in inspection demonstration: the line's two constraint keyframes are grounded on
-/// the scanner under the line's middle, the interactions on the part and its pad.
+/// the scanner under the line's middle, the interactions on the part and its mat.
 #[test]
 fn the_inspection_line_is_grounded_on_the_middle_scanner() {
     let task = builtin::resolve("inspection").unwrap();
@@ -362,7 +362,7 @@ fn the_inspection_line_is_grounded_on_the_middle_scanner() {
                 let expected = match (k.kind, k.gripper) {
                     (KeyframeKind::Constraint, _) => "scanner_2",
                     (_, Gripper::Closed) => "part",
-                    (_, Gripper::Open) => "pad",
+                    (_, Gripper::Open) => "mat",
                 };
                 assert_eq!(k.reference, expected, "seed {seed}: {:#?}", summary(&spec));
             }

@@ -272,11 +272,11 @@ mod tests {
     fn furniture_out_of_reach_is_rejected() {
         let t = builtin::task("pick_place").unwrap().unwrap();
         let shelf_2 = |by: [f64; 3]| {
-            ["shelf_2", "pad_a", "pad_b"]
+            ["shelf_2", "mat_a", "mat_b"]
                 .iter()
                 .fold(t.world.clone(), |w, name| moved(&w, name, by))
         };
-        let w = shelf_2([0.35, 0.0, 0.0]);
+        let w = shelf_2([0.3, 0.0, 0.0]);
         assert!(
             matches!(
                 check_layout(&t, &w),

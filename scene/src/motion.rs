@@ -315,7 +315,7 @@ mod tests {
     fn group_members_and_what_rides_on_a_moved_support_are_moved() {
         let mut t = builtin::task("assembly").unwrap().unwrap();
         let motion = Motion::of(&t).unwrap();
-        for name in ["clamp_top", "rail", "pipe", "block", "pad"] {
+        for name in ["clamp_top", "rail", "pipe", "block", "mat"] {
             assert!(motion.moves(name), "{name}");
         }
         assert!(!motion.moves("table"));

@@ -118,13 +118,13 @@ mod tests {
     use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
 
     /// pick_place's end state as intended: both blocks where the teaching puts them, on
-    /// their pads.
+    /// their mats.
     fn placed() -> (crate::Task, World) {
         let t = builtin::task("pick_place").unwrap().unwrap();
         let mut w = t.world.clone();
-        for (block, pad) in [("block_a", "pad_a"), ("block_b", "pad_b")] {
-            let pad = w.object(pad).unwrap().pose;
-            w.object_mut(block).unwrap().pose = pad * pose_from_xyz([0.0, 0.0, 0.0425]);
+        for (block, mat) in [("block_a", "mat_a"), ("block_b", "mat_b")] {
+            let mat = w.object(mat).unwrap().pose;
+            w.object_mut(block).unwrap().pose = mat * pose_from_xyz([0.0, 0.0, 0.0405]);
         }
         (t, w)
     }
@@ -139,7 +139,7 @@ mod tests {
     }
 
     #[test]
-    fn pick_place_holds_with_both_blocks_upright_on_their_pads() {
+    fn pick_place_holds_with_both_blocks_upright_on_their_mats() {
         let (t, w) = placed();
         assert!(failing(&t, &w).is_empty(), "{:?}", failing(&t, &w));
         // Turned about the vertical is still upright.
@@ -153,30 +153,30 @@ mod tests {
     fn a_tilted_block_fails_for_its_tilt() {
         let (t, mut w) = placed();
         let b = w.object_mut("block_b").unwrap();
-        // Leaning 0.3 rad on an edge: the bottom still touches the pad.
+        // Leaning 0.3 rad on an edge: the bottom still touches the mat.
         b.pose *= pose_from_xyz_rpy([0.0; 3], [0.3, 0.0, 0.0]);
-        b.pose.translation.z = 0.145 + b.shape.world_half_extents(&b.pose).z;
+        b.pose.translation.z = 0.141 + b.shape.world_half_extents(&b.pose).z;
         let f = failing(&t, &w);
         assert_eq!(f.len(), 1, "{f:?}");
         assert!(
-            f[0].starts_with("on(block_b, pad_b)") && f[0].contains("tilted"),
+            f[0].starts_with("on(block_b, mat_b)") && f[0].contains("tilted"),
             "{f:?}"
         );
     }
 
     #[test]
-    fn a_block_beside_its_pad_or_on_the_wrong_shelf_fails() {
+    fn a_block_beside_its_mat_or_on_the_wrong_shelf_fails() {
         let (t, mut w) = placed();
         let shelf_1 = t.world.object("shelf_1").unwrap().pose;
         w.object_mut("block_a").unwrap().pose = shelf_1 * pose_from_xyz([0.0, 0.0, 0.11]);
-        // On the right shelf, 2 cm from its pad: its centre is off the 3 cm pad.
-        let pad_b = t.world.object("pad_b").unwrap().pose;
-        w.object_mut("block_b").unwrap().pose = pad_b * pose_from_xyz([0.02, 0.0, 0.0425]);
+        // On the right shelf, 3 cm from its mat: its centre is off the 4 cm mat.
+        let mat_b = t.world.object("mat_b").unwrap().pose;
+        w.object_mut("block_b").unwrap().pose = mat_b * pose_from_xyz([0.03, 0.0, 0.0405]);
         let f = failing(&t, &w);
         assert!(
             f.len() == 2
-                && f[0].starts_with("on(block_a, pad_a)")
-                && f[1].starts_with("on(block_b, pad_b)")
+                && f[0].starts_with("on(block_a, mat_a)")
+                && f[1].starts_with("on(block_b, mat_b)")
                 && f.iter().all(|f| f.contains("not above")),
             "{f:?}"
         );
