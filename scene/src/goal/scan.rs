@@ -158,8 +158,8 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
     // holds if one of them is straight and runs along the row. Taking the shortest stretches
     // keeps a free motion that also happens over a scanner at scan height, before or after
     // the pass, out of the pass.
-    let mut straightest: Option<(f64, f64, f64)> = None;
-    let mut best_aligned: Option<(f64, f64, f64)> = None;
+    let mut straightest: Option<f64> = None;
+    let mut best_aligned: Option<f64> = None;
     for (first, last) in sweeps(&crossings, scanners.len()) {
         let over_row: Vec<Vector3<f64>> = path[first..=last]
             .iter()
@@ -182,26 +182,25 @@ pub(super) fn evaluate(end: &World, paths: &ObjectPaths, scan: &Scan) -> Result<
                 angle.to_degrees()
             ));
         }
-        let candidate = Some((deviation, angle, length));
-        if straightest.is_none_or(|(d, _, _)| deviation < d) {
-            straightest = candidate;
+        if straightest.is_none_or(|d| deviation < d) {
+            straightest = Some(deviation);
         }
-        if deviation <= scan.max_deviation && best_aligned.is_none_or(|(_, a, _)| angle < a) {
-            best_aligned = candidate;
+        if deviation <= scan.max_deviation && best_aligned.is_none_or(|a| angle < a) {
+            best_aligned = Some(angle);
         }
     }
     Err(match (best_aligned, straightest) {
-        (Some((_, angle, _)), _) if angle > std::f64::consts::FRAC_PI_2 => format!(
+        (Some(angle), _) if angle > std::f64::consts::FRAC_PI_2 => format!(
             "{object} crossed the row from its last scanner towards its first, {:.1}° from the \
              row's direction (the scanners are crossed in the order the goal lists them)",
             angle.to_degrees()
         ),
-        (Some((_, angle, _)), _) => format!(
-            "{object}'s path over the row runs {:.1}° off the row's axis (at most {:.1}° allowed)",
+        (Some(angle), _) => format!(
+            "{object}'s path over the row runs {:.1}° off the row's direction (at most {:.1}° allowed)",
             angle.to_degrees(),
             scan.max_angle.to_degrees()
         ),
-        (None, Some((deviation, _, _))) => format!(
+        (None, Some(deviation)) => format!(
             "{object}'s path over the row leaves a straight line by {:.1} mm (at most {:.1} mm allowed)",
             deviation * 1e3,
             scan.max_deviation * 1e3
@@ -475,7 +474,7 @@ mod tests {
         let slanted = pass([0.58, 0.2, 0.2], [0.52, -0.2, 0.2]);
         let c = scan_goal(&t).check(&t.world, &slanted, &t.world);
         assert!(
-            !c.holds && c.detail.contains("off the row's axis"),
+            !c.holds && c.detail.contains("off the row's direction"),
             "{}",
             c.detail
         );
