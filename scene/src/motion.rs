@@ -105,16 +105,11 @@ impl Motion {
     }
 
     /// Whether randomization can move object `name`: its mover, or a mover carrying it, has
-    /// a range.
+    /// a range that varies.
     pub fn moves(&self, name: &str) -> bool {
-        let mut mover = self.mover_of.get(name).copied();
-        while let Some(i) = mover {
-            if self.movers[i].range.is_some() {
-                return true;
-            }
-            mover = self.movers[i].carrier;
-        }
-        false
+        self.mover_of
+            .get(name)
+            .is_some_and(|&i| self.anchor(i).is_some())
     }
 
     /// Draws one layout: every mover with a range moved by an offset and turn drawn uniformly

@@ -217,7 +217,6 @@ pub fn simulate(
     Some(obs)
 }
 
-/// The simulated TCP and keyframe `k`'s reference object now.
 /// Whether every movable object is at rest by the rest check's measure; read every step of
 /// the settling, so it allocates nothing.
 fn all_resting(sim: &SimWorld, rest_speed: f64) -> bool {
@@ -240,6 +239,7 @@ fn object_speeds(sim: &SimWorld) -> Vec<(String, f64, f64)> {
         .collect()
 }
 
+/// The simulated TCP and keyframe `k`'s reference object now.
 fn reach(setup: &Setup, sim: &SimWorld, arm: &SimArm, k: usize, t: f64) -> KeyframeReach {
     let keyframe = &setup.spec.keyframes[k];
     let name = &keyframe.reference;
