@@ -126,7 +126,6 @@ mod tests {
     use crate::demo::{Answer, DialogueKind};
     use crate::dialogue::ListedAnswers;
     use crate::okl::synth::DemoBuilder;
-    use akl_tsr::Constraint;
 
     fn inspection_without_detector() -> Demo {
         let mut demo = DemoBuilder::new("inspection", [0.2, 0.0, 0.21], 100.0, 0.0005, 2)
@@ -184,11 +183,7 @@ mod tests {
         assert_eq!(answered, vec![Answer::Yes]);
         assert_eq!(marked_frames(&ready), marked_frames(&demo));
         let spec = learn_spec(Method::Akl, &ready, None, &LearnOptions::default()).unwrap();
-        let lines = spec
-            .keyframes
-            .iter()
-            .filter(|k| k.constraint == Constraint::MoveInLine)
-            .count();
+        let lines = spec.line_count();
         assert_eq!(lines, 1);
     }
 

@@ -67,13 +67,6 @@ fn summary(spec: &TaskSpec) -> Vec<(KeyframeKind, String, Gripper, Constraint)> 
         .collect()
 }
 
-fn lines(spec: &TaskSpec) -> usize {
-    spec.keyframes
-        .iter()
-        .filter(|k| k.constraint == Constraint::MoveInLine)
-        .count()
-}
-
 fn position(spec: &TaskSpec, i: usize) -> Vector3<f64> {
     spec.keyframes[i].tsr.nominal().translation.vector
 }
@@ -98,7 +91,7 @@ fn a_line_answered_no_is_not_asked_about_again() {
         assert_eq!(answers, vec![Answer::No, Answer::Yes], "seed {seed}");
         assert!(queries[1] > line_start, "seed {seed}: {queries:?}");
         let spec = akl(&demo);
-        assert_eq!(lines(&spec), 1, "seed {seed}: {:#?}", summary(&spec));
+        assert_eq!(spec.line_count(), 1, "seed {seed}: {:#?}", summary(&spec));
     }
 }
 
@@ -143,7 +136,7 @@ fn a_yes_does_not_carry_across_a_grasp() {
             .unwrap();
         assert!(queries[1] > grasp, "seed {seed}: {queries:?}");
         let spec = akl(&demo);
-        assert_eq!(lines(&spec), 1, "seed {seed}: {:#?}", summary(&spec));
+        assert_eq!(spec.line_count(), 1, "seed {seed}: {:#?}", summary(&spec));
         let end = spec
             .keyframes
             .iter()
@@ -301,7 +294,7 @@ fn an_insertion_without_a_world_is_grounded_on_the_receiving_object() {
             "seed {seed}: {:#?}",
             summary(&spec)
         );
-        assert_eq!(lines(&spec), 1);
+        assert_eq!(spec.line_count(), 1);
     }
 }
 

@@ -1101,11 +1101,7 @@ mod tests {
                 .iter()
                 .filter(|s| s.kind == SegmentKind::Line)
                 .count();
-            let required = truth
-                .keyframes
-                .iter()
-                .filter(|k| k.constraint == Constraint::MoveInLine)
-                .count();
+            let required = truth.line_count();
             assert_eq!(lines, required, "{name}");
             assert!((plan.sample(plan.duration).len()) == 7);
             assert_eq!(plan.sample(0.0), robot.ready());

@@ -77,7 +77,7 @@ mod tests {
     use crate::intent::TeachStep;
     use crate::{ObjectPaths, World};
     use akl_tsr::pose::{position_distance, rotation_distance};
-    use akl_tsr::{Constraint, Gripper, KeyframeKind, Pose};
+    use akl_tsr::{Gripper, KeyframeKind, Pose};
 
     fn all() -> Vec<Task> {
         names()
@@ -164,11 +164,7 @@ mod tests {
                 );
                 assert!(kf.tsr.bw.contains_zero());
             }
-            let lines = truth
-                .keyframes
-                .iter()
-                .filter(|k| k.constraint == Constraint::MoveInLine)
-                .count();
+            let lines = truth.line_count();
             let line_steps = t
                 .teaching
                 .steps

@@ -71,11 +71,7 @@ fn the_ground_truths_pass_and_nothing_in_them_is_superfluous() {
         );
         assert_eq!(flagged(&v), vec![], "{name}");
         assert_eq!(v.verdict, Verdict::Passes, "{name}");
-        let lines = truth
-            .keyframes
-            .iter()
-            .filter(|k| k.constraint == Constraint::MoveInLine)
-            .count();
+        let lines = truth.line_count();
         assert_eq!(v.removals.len(), truth.keyframes.len() + lines, "{name}");
     }
 }

@@ -401,11 +401,7 @@ mod tests {
                 assert!(share.share.unwrap() >= 0.0, "{name}: {share:?}");
             }
             assert_eq!(report.keyframes.len(), truth.keyframes.len());
-            let truths_lines = truth
-                .keyframes
-                .iter()
-                .filter(|k| k.constraint == Constraint::MoveInLine)
-                .count();
+            let truths_lines = truth.line_count();
             assert_eq!(report.lines.len(), truths_lines, "{name}");
 
             let redundant = with_redundant_keyframe(&task, &truth);
