@@ -77,6 +77,22 @@ fn every_ground_truth_passes_randomized_trials() {
             placements[0] != placements[1] && placements[1] != placements[2],
             "every trial moves the objects: {placements:?}"
         );
+        // Every object but the table moves in the built-in tasks, grouped furniture (scanners,
+        // clamp, mats) included, and the report says where each truly was.
+        let placed: Vec<&String> = r["reports"][0]["placements"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .collect();
+        let world = akl_scene::builtin::task(task).unwrap().unwrap().world;
+        let mut moved: Vec<&String> = world
+            .objects
+            .iter()
+            .map(|o| &o.name)
+            .filter(|n| *n != "table")
+            .collect();
+        moved.sort();
+        assert_eq!(placed, moved, "{task}");
         if task != "pick_place" {
             let worst = r["worst_line_deviation"].as_f64().unwrap();
             assert!(worst < 0.005, "{task}: {worst}");
