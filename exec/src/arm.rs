@@ -21,9 +21,9 @@
 
 use crate::convert::{link_collider, to_sim};
 use crate::grasp::PadReading;
-use crate::hand::{HandModel, LocalBox};
 use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
 use akl_planner::fk::{Drive, Motion};
+use akl_planner::hand::{HandModel, LocalBox};
 use akl_planner::{Geometry, Robot};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;

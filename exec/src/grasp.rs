@@ -20,8 +20,9 @@
 
 use crate::arm::{SimArm, LINK_FRICTION};
 use crate::convert::to_sim;
-use crate::hand::Finger;
 use crate::world::{Owner, SimWorld};
+use akl_planner::hand::Finger;
+use akl_planner::squeeze::{squared_in_hand, squaring_turn};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use rapier3d::parry::query::distance;
@@ -208,6 +209,20 @@ impl GraspMeasure {
         }
         None
     }
+}
+
+/// Seats object `object` between the closed pads of `arm` as their squeeze does
+/// ([`akl_planner::squeeze`], the rule the planner's held model follows): turned about the
+/// hand's approach axis until it lies flat on the pads. Returns the turn (radians).
+pub fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
+    let tcp = arm.tcp(sim);
+    let shape = sim.template().objects[object].shape;
+    let in_tcp = tcp.inverse() * sim.object_pose(object);
+    let turn = squaring_turn(&shape, &in_tcp);
+    if turn != 0.0 {
+        sim.set_object_pose(object, &(tcp * squared_in_hand(&shape, &in_tcp)));
+    }
+    turn
 }
 
 /// An object welded to the hand while friction could hold it.

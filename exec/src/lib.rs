@@ -9,7 +9,6 @@ pub mod convert;
 pub mod error;
 pub mod grasp;
 pub mod grounding;
-pub mod hand;
 pub mod perception;
 pub mod report;
 pub mod simulate;

@@ -195,6 +195,9 @@ pub struct GraspCheck {
     pub overlap: Option<f64>,
     /// Whether the grasp was sound and the object carried.
     pub held: bool,
+    /// The turn (radians) by which the pads' squeeze seated the object flat on them about the
+    /// hand's approach axis (0 when it was square, round, or turned too far to be seated).
+    pub squared: f64,
     /// Largest displacement of the object in the hand until it was let go (metres).
     pub slip: f64,
     /// Largest force along the pads' faces the grasp carried (N).

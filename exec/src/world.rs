@@ -232,6 +232,15 @@ impl SimWorld {
         from_sim(self.physics.bodies[self.objects[i].body].position())
     }
 
+    /// Moves object `i` to `pose` at once, keeping its velocity (a squeeze seating it between
+    /// the pads, see [`crate::grasp::square`]).
+    pub fn set_object_pose(&mut self, i: usize, pose: &Pose) {
+        let body = self.objects[i].body;
+        if let Some(b) = self.physics.bodies.get_mut(body) {
+            b.set_position(crate::convert::to_sim(pose), true);
+        }
+    }
+
     /// The linear and angular speed of object `i` (m/s, rad/s).
     pub fn object_speed(&self, i: usize) -> (f64, f64) {
         let body = &self.physics.bodies[self.objects[i].body];

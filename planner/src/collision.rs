@@ -19,6 +19,7 @@
 use crate::contact_rules::{self, LinkRole};
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
+use crate::hand::HandModel;
 use crate::parry_convert;
 use crate::robot::Robot;
 use akl_scene::{Shape, World};
@@ -99,6 +100,19 @@ pub struct RobotCollision {
     turned: Vec<(usize, Vector3<f64>)>,
 }
 
+/// Every collision element of `robot` as (link, geometry, pose in the link frame): the URDF's
+/// shapes, and the simulated hand's palm and pads ([`crate::hand`]), whose box corners reach
+/// past the URDF's capsules: the planner keeps clear whatever the simulated hand can touch.
+fn collision_elements(robot: &Robot) -> Vec<(usize, Geometry, Pose)> {
+    let urdf = robot
+        .links()
+        .iter()
+        .enumerate()
+        .flat_map(|(i, link)| link.shapes.iter().map(move |s| (i, s.geometry, s.origin)));
+    let hand = HandModel::new(robot).map(|h| h.boxes()).unwrap_or_default();
+    urdf.chain(hand).collect()
+}
+
 /// The clearances kept (metres).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Margins {
@@ -176,12 +190,18 @@ pub struct Allowances {
     /// World objects the held object may touch (the support it leaves or is placed on).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub held_may_touch: Vec<String>,
+    /// Fixtures the held object may brush against lightly while it is inserted into them
+    /// (judged by the simulation only: the planner keeps its clearance from them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_may_brush: Vec<String>,
 }
 
 impl Allowances {
     /// Whether nothing is allowed.
     pub fn is_empty(&self) -> bool {
-        self.hand_may_touch.is_empty() && self.held_may_touch.is_empty()
+        self.hand_may_touch.is_empty()
+            && self.held_may_touch.is_empty()
+            && self.held_may_brush.is_empty()
     }
 }
 
@@ -235,7 +255,7 @@ impl RobotCollision {
     /// The same with other margins (e.g. to re-check a plan with the clearance it guarantees).
     pub fn with_margins(robot: &Robot, margins: Margins) -> RobotCollision {
         let mut bodies = Vec::new();
-        for (i, link) in robot.links().iter().enumerate() {
+        for (i, geometry, origin) in collision_elements(robot) {
             let group = if robot.hand_links().contains(&i) {
                 Group::Hand
             } else {
@@ -245,25 +265,23 @@ impl RobotCollision {
                 Group::Arm => margins.arm,
                 Group::Hand => margins.hand,
             };
-            for s in &link.shapes {
-                let (world_shape, fix) = parry_convert::robot_shape(&s.geometry, margin);
-                let (self_shape, _) = parry_convert::robot_shape(&s.geometry, 0.5 * margins.self_);
-                let (half_segment, core) = match s.geometry {
-                    Geometry::Capsule { radius, length } => (0.5 * length, radius),
-                    other => (0.0, other.bounding_radius()),
-                };
-                bodies.push(Body {
-                    link: i,
-                    group,
-                    local: s.origin * fix,
-                    world_shape,
-                    self_shape,
-                    half_segment,
-                    core_radius: core,
-                    world_radius: core + margin,
-                    self_radius: core + 0.5 * margins.self_,
-                });
-            }
+            let (world_shape, fix) = parry_convert::robot_shape(&geometry, margin);
+            let (self_shape, _) = parry_convert::robot_shape(&geometry, 0.5 * margins.self_);
+            let (half_segment, core) = match geometry {
+                Geometry::Capsule { radius, length } => (0.5 * length, radius),
+                other => (0.0, other.bounding_radius()),
+            };
+            bodies.push(Body {
+                link: i,
+                group,
+                local: origin * fix,
+                world_shape,
+                self_shape,
+                half_segment,
+                core_radius: core,
+                world_radius: core + margin,
+                self_radius: core + 0.5 * margins.self_,
+            });
         }
         let allowed = |a: usize, b: usize| {
             a == b
@@ -982,7 +1000,7 @@ mod tests {
                 None,
                 &Allowances {
                     hand_may_touch: vec!["table".into()],
-                    held_may_touch: vec![],
+                    ..Allowances::default()
                 }
             ),
             None
@@ -1041,8 +1059,8 @@ mod tests {
             Some(Hit::HeldWorld("block_a".into(), "shelf_1".into()))
         );
         let allow = Allowances {
-            hand_may_touch: vec![],
             held_may_touch: vec!["shelf_1".into()],
+            ..Allowances::default()
         };
         assert_eq!(checker.check(&q, 0.05, Some(&held), &allow), None);
     }

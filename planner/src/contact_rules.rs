@@ -9,7 +9,14 @@
 //! - the hand links may touch the object they hold, and the objects the step grasps or has just
 //!   released;
 //! - the held object may touch the support it has not yet been lifted from, and the support
-//!   it is being placed on, but not press into it deeper than [`PRESS_DEPTH`];
+//!   it is being placed on (and what that support stands on: an object set down on a mat 1 mm
+//!   thick overhangs it a hair above the shelf), but not press into it deeper than
+//!   [`PRESS_DEPTH`];
+//! - along a `move_in_line` that inserts the held object into a fixture (it ends within
+//!   [`ENTRY_CLEARANCE`] of fixed objects: a tunnel's walls, a sleeve), the held object may
+//!   brush against that fixture ([`held_may_brush`]): a compliant insertion on a real robot
+//!   touches the walls it slides between. The planner still keeps its clearance from them; the
+//!   simulation tolerates a light contact only (its limits are the execution's);
 //! - nothing else may touch anything.
 
 use crate::collision::Allowances;
@@ -19,6 +26,12 @@ use akl_tsr::WORLD_FRAME;
 /// the single-precision noise of resting contact; a placement deeper than that presses the
 /// object into its support.
 pub const PRESS_DEPTH: f64 = 5e-4;
+
+/// How close (metres) fixed objects come to the held object at the end of a `move_in_line` for
+/// the line to insert it into them: 1 cm, wider than the built-in assembly's 6 mm tunnel
+/// clearance and narrower than any gap a free placement leaves on purpose. Decided on the
+/// world the planner perceives and the pose it plans, before any trial runs.
+pub const ENTRY_CLEARANCE: f64 = 0.01;
 
 /// What a robot link is, as far as contacts go.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -40,6 +53,10 @@ pub struct Step<'a> {
     pub resting_on: Option<&'a str>,
     /// The support the held object is being put on.
     pub placing_on: Option<&'a str>,
+    /// What that support stands on.
+    pub beneath: Option<&'a str>,
+    /// The fixtures the held object is being inserted into (see [`ENTRY_CLEARANCE`]).
+    pub entering: &'a [String],
 }
 
 impl Step<'_> {
@@ -49,10 +66,14 @@ impl Step<'_> {
         for object in [self.grasping, self.released].into_iter().flatten() {
             add(&mut allow.hand_may_touch, object);
         }
-        for support in [self.resting_on, self.placing_on].into_iter().flatten() {
+        let placing = [self.placing_on, self.placing_on.and(self.beneath)];
+        for support in [self.resting_on].into_iter().chain(placing).flatten() {
             if support != WORLD_FRAME {
                 add(&mut allow.held_may_touch, support);
             }
+        }
+        for fixture in self.entering {
+            add(&mut allow.held_may_brush, fixture);
         }
         allow
     }
@@ -80,6 +101,12 @@ pub fn link_may_touch(
 /// Whether the held object may touch `object` in a step that allows `allow`.
 pub fn held_may_touch(object: &str, allow: &Allowances) -> bool {
     allow.held_may_touch.iter().any(|n| n == object)
+}
+
+/// Whether the held object may brush against `object` (a fixture it is being inserted into)
+/// in a step that allows `allow`: a light contact, within the execution's limits for it.
+pub fn held_may_brush(object: &str, allow: &Allowances) -> bool {
+    allow.held_may_brush.iter().any(|n| n == object)
 }
 
 #[cfg(test)]
@@ -122,6 +149,38 @@ mod tests {
         assert!(!link_may_touch(ARM, "table", None, Some("table"), &none));
         assert!(link_may_touch(HAND, "part", Some("part"), None, &none));
         assert!(!link_may_touch(ARM, "part", Some("part"), None, &none));
+    }
+
+    #[test]
+    fn an_insertion_lets_the_held_object_brush_only_the_fixture_it_enters() {
+        let clamp = ["clamp_left".to_string(), "clamp_right".to_string()];
+        let allow = Step {
+            resting_on: Some("rail"),
+            entering: &clamp,
+            ..Step::default()
+        }
+        .allowances();
+        assert!(held_may_brush("clamp_left", &allow) && held_may_brush("clamp_right", &allow));
+        assert!(!held_may_touch("clamp_left", &allow));
+        assert!(!held_may_brush("rail", &allow) && held_may_touch("rail", &allow));
+        assert!(!held_may_brush("clamp_left", &Step::default().allowances()));
+    }
+
+    #[test]
+    fn a_placement_may_touch_its_support_and_what_the_support_stands_on() {
+        let allow = Step {
+            placing_on: Some("mat"),
+            beneath: Some("shelf_2"),
+            ..Step::default()
+        }
+        .allowances();
+        assert_eq!(allow.held_may_touch, ["mat", "shelf_2"]);
+        let carrying = Step {
+            beneath: Some("shelf_2"),
+            ..Step::default()
+        }
+        .allowances();
+        assert!(carrying.held_may_touch.is_empty());
     }
 
     #[test]

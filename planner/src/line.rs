@@ -1,5 +1,6 @@
 //! Straight-line TCP motion: the TCP position moves linearly and its orientation by slerp
-//! between two world poses, sampled densely; each sample is solved by inverse kinematics
+//! between two world poses (evenly, or over the line's first part, [`TURN_PROFILES`]), sampled
+//! densely; each sample is solved by inverse kinematics
 //! seeded from the previous one, rejecting joint jumps, and each step is collision-checked.
 
 use crate::collision::Hit;
@@ -79,13 +80,6 @@ impl fmt::Display for LineFailure {
     }
 }
 
-/// The pose a fraction `s` of the way from `a` to `b` (position lerp, orientation slerp).
-pub fn interpolate(a: &Pose, b: &Pose, s: f64) -> Option<Pose> {
-    let p = a.translation.vector.lerp(&b.translation.vector, s);
-    let r = a.rotation.try_slerp(&b.rotation, s, 1e-9)?;
-    Some(Pose::from_parts(Translation3::from(p), r))
-}
-
 /// Distance from point `p` to the segment from `a` to `b`.
 pub fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     let ab = b - a;
@@ -98,8 +92,20 @@ pub fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>)
     (a + t * ab - p).norm()
 }
 
+/// How soon along a line the TCP's turn is done, as fractions of the line, in the order they
+/// are tried: evenly over the whole line first, then within its first half or quarter. A
+/// `move_in_line` constrains where the TCP goes, not when it turns; a held object that must
+/// enter a tight opening square to it (the assembly's pipe, grasped a few degrees off its
+/// perceived pose) enters it only if the turn is over before it gets there.
+pub const TURN_PROFILES: [f64; 3] = [1.0, 0.5, 0.25];
+
+/// Turns smaller than this (radians) are planned evenly only: every profile gives the same line.
+const NEGLIGIBLE_TURN: f64 = 1e-3;
+
 /// Joint waypoints that move the TCP from `from` (where it is at `start`) to `to` on the
-/// straight line, both world poses; `base` is the robot base pose in the world.
+/// straight line, both world poses; `base` is the robot base pose in the world. The TCP turns
+/// evenly along the line, or, when that collides, faster at its start ([`TURN_PROFILES`]); the
+/// first profile's failure is the one reported when none plans.
 pub fn plan_line(
     space: &Space,
     start: &[f64],
@@ -108,18 +114,39 @@ pub fn plan_line(
     base: &Pose,
     options: &LineOptions,
 ) -> Result<Vec<Vec<f64>>, LineFailure> {
+    let even = plan_line_turning(space, start, from, to, base, options, 1.0);
+    let turn = from.rotation.angle_to(&to.rotation);
+    match even {
+        Err(LineFailure::Collision { .. }) if turn > NEGLIGIBLE_TURN => TURN_PROFILES[1..]
+            .iter()
+            .find_map(|&by| plan_line_turning(space, start, from, to, base, options, by).ok())
+            .ok_or_else(|| even.unwrap_err()),
+        other => other,
+    }
+}
+
+/// [`plan_line`] with the turn done at fraction `turn_by` of the line.
+fn plan_line_turning(
+    space: &Space,
+    start: &[f64],
+    from: &Pose,
+    to: &Pose,
+    base: &Pose,
+    options: &LineOptions,
+    turn_by: f64,
+) -> Result<Vec<Vec<f64>>, LineFailure> {
     let robot = space.checker.robot();
     let distance = (to.translation.vector - from.translation.vector).norm();
     let angle = from.rotation.angle_to(&to.rotation);
     let steps = (distance / options.position_step)
-        .max(angle / options.rotation_step)
+        .max(angle / (turn_by * options.rotation_step))
         .ceil()
         .max(1.0) as usize;
     let base_inv = base.inverse();
     let mut path = vec![start.to_vec()];
     for k in 1..=steps {
         let s = k as f64 / steps as f64;
-        let pose = interpolate(from, to, s).ok_or(LineFailure::HalfTurn)?;
+        let pose = interpolate_turning(from, to, s, turn_by).ok_or(LineFailure::HalfTurn)?;
         let target = base_inv * pose;
         let previous = &path[path.len() - 1];
         let q = match robot.ik_continuous(&target, previous, options.max_joint_step) {
@@ -135,6 +162,16 @@ pub fn plan_line(
         path.push(q);
     }
     Ok(path)
+}
+
+/// The pose a fraction `s` of the way from `a` to `b` (position lerp, orientation slerp), with
+/// the turn done at fraction `turn_by` of the way.
+pub fn interpolate_turning(a: &Pose, b: &Pose, s: f64, turn_by: f64) -> Option<Pose> {
+    let p = a.translation.vector.lerp(&b.translation.vector, s);
+    let r = a
+        .rotation
+        .try_slerp(&b.rotation, (s / turn_by).min(1.0), 1e-9)?;
+    Some(Pose::from_parts(Translation3::from(p), r))
 }
 
 #[cfg(test)]

@@ -33,10 +33,11 @@
 //! Everything is deterministic for a given seed.
 
 use crate::collision::{Allowances, Checker, Held, RobotCollision, Scene};
-use crate::contact_rules::Step;
+use crate::contact_rules::{Step, ENTRY_CLEARANCE};
 use crate::error::PlanError;
 use crate::goal::{find_goals, GoalFailure, GoalOptions, GoalStrategy};
 use crate::line::{distance_to_segment, plan_line, LineFailure, LineOptions};
+use crate::parry_convert;
 use crate::plan::{
     GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind, PLAN_VERSION,
 };
@@ -45,6 +46,7 @@ use crate::rrt::{rrt_connect, RrtOptions, RrtResult};
 use crate::search::{plan_best, PlanBudget};
 use crate::shortcut::shortcut;
 use crate::space::Space;
+use crate::squeeze::squared_in_hand;
 use crate::timing::{self, Timing};
 use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::{Translation3, Vector3};
@@ -102,8 +104,14 @@ struct Holding {
 /// What happens at a keyframe.
 #[derive(Debug, Clone, PartialEq)]
 enum Event {
-    Grasp { object: String },
-    Release { support: String },
+    Grasp {
+        object: String,
+    },
+    Release {
+        support: String,
+        /// What the support stands on.
+        beneath: Option<String>,
+    },
 }
 
 /// A straight TCP segment: joint waypoints, grounded end poses and the contacts it allows.
@@ -220,12 +228,17 @@ fn grasp_width(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
     }
 }
 
+/// Times a timed line that strays from its line is planned again with denser waypoints
+/// (see `push_line`).
+const LINE_REFINEMENTS: usize = 2;
+
 /// Where an object grasped with the TCP at `tcp` sits in the TCP frame once the fingers have
 /// closed on it: a parallel gripper pushes what it closes on to the middle between its fingers,
 /// so the object's centre ends on the closing axis's midpoint (TCP y = 0), whatever error its
-/// perceived pose had along that axis.
-fn centred_in_hand(tcp: &Pose, object: &Pose) -> Pose {
-    let mut in_tcp = tcp.inverse() * object;
+/// perceived pose had along that axis; and its squeeze lays the object flat on the pads
+/// ([`squared_in_hand`]), as the simulation's grasp does.
+fn centred_in_hand(tcp: &Pose, object: &Pose, shape: &Shape) -> Pose {
+    let mut in_tcp = squared_in_hand(shape, &(tcp.inverse() * object));
     in_tcp.translation.vector.y = 0.0;
     in_tcp
 }
@@ -247,8 +260,9 @@ impl Step<'_> {
                 grasping: Some(object),
                 ..Step::default()
             },
-            Some(Event::Release { support }) => Step {
+            Some(Event::Release { support, beneath }) => Step {
                 placing_on: Some(support),
+                beneath: beneath.as_deref(),
                 ..Step::default()
             },
             None => Step::default(),
@@ -259,6 +273,11 @@ impl Step<'_> {
 impl<'a> Planner<'a> {
     fn base(&self) -> Pose {
         self.world.robot_base
+    }
+
+    /// What `support` stands on in the world planned in, if anything.
+    fn beneath(&self, support: &str) -> Option<String> {
+        self.world.support_of(support).map(|o| o.name.clone())
     }
 
     fn tcp_world(&self, q: &[f64]) -> Pose {
@@ -306,6 +325,7 @@ impl<'a> Planner<'a> {
             }
             (Gripper::Closed, Gripper::Open) => Ok(Some(Event::Release {
                 support: kf.reference.clone(),
+                beneath: self.beneath(&kf.reference),
             })),
             _ => Ok(None),
         }
@@ -369,7 +389,11 @@ impl<'a> Planner<'a> {
         });
     }
 
-    /// Appends a straight segment and checks that it keeps to its line.
+    /// Appends a straight segment and checks that it keeps to its line. A timed line that
+    /// strays (the joint-space spline between IK waypoints bulges near a wrist or elbow that
+    /// turns fast) is planned again with waypoints twice as dense, up to [`LINE_REFINEMENTS`]
+    /// times: measured on 1,000 randomized inspection trials, one line in a thousand strayed
+    /// 1.07 mm at the default spacing.
     fn push_line(
         &mut self,
         kind: SegmentKind,
@@ -377,19 +401,50 @@ impl<'a> Planner<'a> {
         line: PlannedLine,
         planning_time: f64,
     ) -> Result<(), PlanError> {
-        self.push(
-            kind,
-            i,
-            line.path,
-            Some(line.poses),
-            line.allow,
-            planning_time,
-        );
-        self.verify_line(i)
+        let mut line = line;
+        let mut options = self.options.line;
+        let mut refinement = 0;
+        loop {
+            let (to, allow) = (line.poses.to, line.allow.clone());
+            self.push(
+                kind,
+                i,
+                line.path,
+                Some(line.poses),
+                line.allow,
+                planning_time,
+            );
+            let strayed = match self.verify_line(i) {
+                Ok(()) => return Ok(()),
+                Err(e) if refinement == LINE_REFINEMENTS => return Err(e),
+                Err(e) => e,
+            };
+            let Some(segment) = self.segments.pop() else {
+                return Err(strayed);
+            };
+            self.t = segment.start;
+            if let Some(start) = segment.waypoints.first() {
+                self.q = start.clone();
+            }
+            options.position_step *= 0.5;
+            options.rotation_step *= 0.5;
+            line = self.line_with(&to, &allow, &options).map_err(|_| strayed)?;
+            refinement += 1;
+        }
     }
 
     /// Plans a straight TCP line from the current configuration to `to` (world).
     fn line_to(&self, to: &Pose, allow: &Allowances) -> Result<PlannedLine, LineFailure> {
+        self.line_with(to, allow, &self.options.line)
+    }
+
+    /// [`Self::line_to`] with other line settings.
+    fn line_with(
+        &self,
+        to: &Pose,
+        allow: &Allowances,
+        options: &LineOptions,
+    ) -> Result<PlannedLine, LineFailure> {
         let scene = self.scene();
         let checker = Checker::new(self.robot, &self.model, &scene);
         let space = Space {
@@ -399,7 +454,7 @@ impl<'a> Planner<'a> {
             allow,
         };
         let from = self.tcp_world(&self.q);
-        let path = plan_line(&space, &self.q, &from, to, &self.base(), &self.options.line)?;
+        let path = plan_line(&space, &self.q, &from, to, &self.base(), options)?;
         Ok(PlannedLine {
             path,
             poses: LinePoses { from, to: *to },
@@ -439,7 +494,7 @@ impl<'a> Planner<'a> {
         self.just_released = None;
         match event {
             Some(Event::Grasp { object }) => self.grasp(i, &object, approach, next_line),
-            Some(Event::Release { support }) => self.release(i, &support, approach, next_line),
+            Some(Event::Release { support, .. }) => self.release(i, &support, approach, next_line),
             None => Ok(()),
         }?;
         self.gripper = kf.gripper;
@@ -464,7 +519,7 @@ impl<'a> Planner<'a> {
         started: Instant,
     ) -> Result<(), PlanError> {
         let segment = format!("line to keyframe {i}");
-        let planned = match self.pending_line.take() {
+        let mut planned = match self.pending_line.take() {
             Some(planned) => planned,
             None => {
                 let allow = self.line_allowances(event);
@@ -507,12 +562,42 @@ impl<'a> Planner<'a> {
                 }
             }
         };
+        let entering = self.entered_fixtures(&planned.poses.to, &planned.allow);
+        planned.allow.held_may_brush = Step {
+            entering: &entering,
+            ..Step::default()
+        }
+        .allowances()
+        .held_may_brush;
         self.push_line(
             SegmentKind::Line,
             i,
             planned,
             started.elapsed().as_secs_f64(),
         )
+    }
+
+    /// The fixed objects a line ending with the TCP at `to` inserts the held object into: those
+    /// within [`ENTRY_CLEARANCE`] of it there, but for what `allow` already lets it touch (its
+    /// support). None when nothing is held.
+    fn entered_fixtures(&self, to: &Pose, allow: &Allowances) -> Vec<String> {
+        let Some(held) = self.holding.as_ref().map(|h| &h.held) else {
+            return Vec::new();
+        };
+        let (shape, local) = parry_convert::object_shape(&held.shape, 0.0);
+        let at = to * held.in_tcp * local;
+        self.world
+            .objects
+            .iter()
+            .filter(|o| !o.movable && o.name != held.name)
+            .filter(|o| !allow.held_may_touch.contains(&o.name))
+            .filter(|o| {
+                let (other, fix) = parry_convert::object_shape(&o.shape, 0.0);
+                parry_convert::distance(&shape, &at, &other, &(o.pose * fix))
+                    .is_some_and(|d| d < ENTRY_CLEARANCE)
+            })
+            .map(|o| o.name.clone())
+            .collect()
     }
 
     /// Seconds a straight segment along `path` takes (timed as `push` times it).
@@ -703,7 +788,7 @@ impl<'a> Planner<'a> {
                 let held = Held::new(
                     object,
                     o.shape,
-                    centred_in_hand(pose, &o.pose),
+                    centred_in_hand(pose, &o.pose, &o.shape),
                     self.model.margins().held,
                 );
                 let width = grasp_width(&o.shape, &o.pose, pose).min(self.robot.open_width());
@@ -774,7 +859,7 @@ impl<'a> Planner<'a> {
                 held: Held::new(
                     object,
                     o.shape,
-                    centred_in_hand(pose, &o.pose),
+                    centred_in_hand(pose, &o.pose, &o.shape),
                     self.model.margins().held,
                 ),
                 resting_on: world.support_of(object).map(|s| s.name.clone()),
@@ -796,11 +881,14 @@ impl<'a> Planner<'a> {
         let checker = Checker::new(self.robot, &self.model, &scene);
         let next_closes = next.gripper == Gripper::Closed && holding.is_none();
         let next_opens = next.gripper == Gripper::Open && holding.is_some();
+        let beneath = self.beneath(&next.reference);
         let allow = Step {
             grasping: next_closes.then_some(next.reference.as_str()),
             released: released.as_deref(),
             resting_on: holding.as_ref().and_then(|h| h.resting_on.as_deref()),
             placing_on: next_opens.then_some(next.reference.as_str()),
+            beneath: beneath.as_deref(),
+            ..Step::default()
         }
         .allowances();
         let space = Space {
@@ -877,7 +965,7 @@ impl<'a> Planner<'a> {
             });
         }
         let support = self.world.support_of(object).map(|s| s.name.clone());
-        let in_tcp = centred_in_hand(&tcp, &o.pose);
+        let in_tcp = centred_in_hand(&tcp, &o.pose, &o.shape);
         self.events.push(GripperEvent {
             t: self.t,
             action: GripperAction::Close,
@@ -956,9 +1044,11 @@ impl<'a> Planner<'a> {
             width: self.robot.open_width(),
             object_pose: placed,
         });
+        let beneath = self.beneath(support);
         let released = Step {
             released: Some(&name),
             placing_on: Some(support),
+            beneath: beneath.as_deref(),
             ..Step::default()
         }
         .allowances();
@@ -1046,16 +1136,26 @@ mod tests {
     use std::path::Path;
 
     #[test]
-    fn a_grasped_object_ends_centred_between_the_fingers() {
+    fn a_grasped_object_ends_centred_between_the_fingers_and_squared_on_the_pads() {
         use akl_tsr::pose::{pose_from_xyz_rpy, rotation_distance};
+        let block = Shape::Box {
+            size: [0.05, 0.05, 0.08],
+        };
         let tcp = pose_from_xyz_rpy([0.5, 0.0, 0.1], [std::f64::consts::PI, 0.0, 0.3]);
-        let seen = pose_from_xyz_rpy([0.503, 0.002, 0.06], [0.0, 0.0, 0.03]);
-        let held = centred_in_hand(&tcp, &seen);
+        // Seen 0.04 rad off the hand's turn about the vertical.
+        let seen = pose_from_xyz_rpy([0.503, 0.002, 0.06], [0.0, 0.0, 0.34]);
+        let held = centred_in_hand(&tcp, &seen, &block);
         let plain = tcp.inverse() * seen;
         assert!(held.translation.y.abs() < 1e-12 && plain.translation.y.abs() > 1e-3);
-        assert!((held.translation.x - plain.translation.x).abs() < 1e-12);
         assert!((held.translation.z - plain.translation.z).abs() < 1e-12);
-        assert!(rotation_distance(&held, &plain) < 1e-12);
+        assert!((rotation_distance(&held, &plain) - 0.04).abs() < 1e-9);
+        // Square in the hand: its faces lie along the TCP axes.
+        let r = held.rotation.to_rotation_matrix();
+        assert!((r.matrix().column(0).x.abs() - 1.0).abs() < 1e-9);
+        // A turn further than the squeeze undoes stays.
+        let far = pose_from_xyz_rpy([0.503, 0.002, 0.06], [0.0, 0.0, 0.03]);
+        let kept = centred_in_hand(&tcp, &far, &block);
+        assert!(rotation_distance(&kept, &(tcp.inverse() * far)) < 1e-12);
     }
 
     fn options(seed: u64) -> PlanOptions {
@@ -1141,7 +1241,12 @@ mod tests {
             .iter()
             .find(|s| s.kind == SegmentKind::Line)
             .unwrap();
-        assert_eq!(line.allowed.held_may_touch, vec!["rail".to_string()]);
+        // The rail it slides on, and the table under the rail it is set down on.
+        assert_eq!(line.allowed.held_may_touch, ["rail", "table"]);
+        // The insertion: the pipe may brush the clamp it enters, nothing else.
+        let mut entered = line.allowed.held_may_brush.clone();
+        entered.sort();
+        assert_eq!(entered, ["clamp_left", "clamp_right", "clamp_top"]);
         let release = plan.events.iter().rfind(|e| e.object == "pipe").unwrap();
         assert_eq!(release.action, GripperAction::Open);
         let goal = akl_tsr::pose::pose_from_xyz_rpy(

@@ -4,7 +4,7 @@
 
 use super::observations::{GraspEvent, Observations, ReleaseEvent};
 use crate::arm::{FingerCommand, SimArm};
-use crate::grasp::{measure, read_pads, GraspLimits, Weld};
+use crate::grasp::{measure, read_pads, square, GraspLimits, Weld};
 use crate::world::SimWorld;
 use akl_planner::{GripperAction, Plan, SegmentKind};
 use akl_tsr::{Pose, TaskSpec};
@@ -163,9 +163,15 @@ impl Gripper {
     ) {
         let t = sim.time();
         if let Some(closing) = self.closing.clone() {
-            if arm.closed() || t >= closing.deadline {
+            // The hand stopped because both pads touched before the step; the step may have
+            // moved the object off one of them by a fraction of a millimetre (the last push
+            // leaves it sliding). A real hand keeps squeezing until both pads bear on it, so
+            // the closing goes on unless the pads still touch after the step.
+            let pads = read_pads(sim, arm);
+            let both_touch = pads.iter().all(|p| p.touches());
+            if (arm.closed() && both_touch) || t >= closing.deadline {
                 self.closing = None;
-                let pads = read_pads(sim, arm).map(|p| p.object.filter(|_| p.touches()));
+                let pads = pads.map(|p| p.object.filter(|_| p.touches()));
                 self.close_on(closing, pads, sim, arm, obs);
             }
         }
@@ -207,6 +213,7 @@ impl Gripper {
             measure: None,
             unsound: None,
             welded: false,
+            squared: 0.0,
             broke_at: None,
             slip: 0.0,
             peak_load: 0.0,
@@ -227,6 +234,7 @@ impl Gripper {
             if sim.objects[o].name == closing.intended {
                 event.unsound = m.unsound(&self.limits);
                 if event.unsound.is_none() {
+                    event.squared = square(sim, arm, o);
                     let weld = Weld::attach(sim, arm, o, &m, self.grasp_force);
                     event.welded = weld.is_some();
                     self.holding = Some(Holding {

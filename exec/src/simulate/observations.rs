@@ -49,6 +49,8 @@ pub struct GraspEvent {
     pub unsound: Option<String>,
     /// Whether the object was welded to the hand (a sound grasp of the intended object).
     pub welded: bool,
+    /// The turn (radians) by which the squeeze seated the welded object flat on the pads.
+    pub squared: f64,
     /// When the load exceeded what friction holds and the object came loose.
     pub broke_at: Option<f64>,
     /// Largest displacement of the object in the hand until it was released (metres).

@@ -1,17 +1,19 @@
-//! The gripper's physical model in the simulation: the palm and the two finger pads.
+//! The gripper as bodies: the palm and the two finger pads, derived from the URDF.
 //!
-//! The planner's hand model is deliberately coarse and fills the space between the fingers, so
-//! that planning keeps that space free. The simulation needs the hand as it is: a palm that
-//! ends where the fingers are mounted, and two flat pads that close on what is between them.
+//! The simulation grasps with these (a palm that ends where the fingers are mounted, two flat
+//! pads that close on what is between them), and the planner's collision model of the hand
+//! holds them besides the URDF's own shapes, so whatever the simulated hand touches, the
+//! planner kept clear (the boxes reach past the URDF's capsules at their corners). The URDF
+//! shapes fill the space between the fingers, so that planning keeps that space free.
 //! Both are derived from the URDF, so another two-finger robot works the same way:
 //! - each pad is the bounding box of its finger's URDF shapes (for the Panda, 20 × 20 × 50 mm
 //!   with its inner face on the finger's inner side);
 //! - the palm is the bounding box of the hand link's URDF shapes, cut at the plane where the
 //!   finger joints sit (for the Panda, 58.4 mm below the flange).
 
-use crate::convert::link_collider;
-use akl_planner::fk::Motion;
-use akl_planner::{Geometry, Robot};
+use crate::fk::Motion;
+use crate::parry_convert::{pose, robot_shape};
+use crate::{Geometry, Robot};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 
@@ -48,7 +50,8 @@ fn bounds(shapes: &[(Geometry, Pose)]) -> Option<(Vector3<f64>, Vector3<f64>)> {
     let mut lo = Vector3::repeat(f64::INFINITY);
     let mut hi = Vector3::repeat(f64::NEG_INFINITY);
     for (geometry, origin) in shapes {
-        let aabb = link_collider(geometry, origin).build().compute_aabb();
+        let (shape, fix) = robot_shape(geometry, 0.0);
+        let aabb = shape.compute_aabb(&pose(&(origin * fix)));
         for k in 0..3 {
             lo[k] = lo[k].min(f64::from(aabb.mins[k]));
             hi[k] = hi[k].max(f64::from(aabb.maxs[k]));
@@ -161,6 +164,20 @@ impl HandModel {
     /// The finger with robot link index `link`.
     pub fn finger(&self, link: usize) -> Option<&Finger> {
         self.fingers.iter().find(|f| f.link == link)
+    }
+
+    /// The boxes of the hand as (link, geometry, pose in the link frame): the palm and each
+    /// pad.
+    pub fn boxes(&self) -> Vec<(usize, Geometry, Pose)> {
+        let palm = self.palm.map(|p| (self.palm_link, p));
+        let pads = self.fingers.iter().map(|f| (f.link, f.pad));
+        palm.into_iter()
+            .chain(pads)
+            .map(|(link, b)| {
+                let (geometry, origin) = b.geometry();
+                (link, geometry, origin)
+            })
+            .collect()
     }
 }
 
