@@ -10,6 +10,7 @@ pub mod error;
 pub mod grasp;
 pub mod grounding;
 pub mod hand;
+pub mod interrupt;
 pub mod perception;
 pub mod report;
 pub mod simulate;

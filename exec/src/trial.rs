@@ -6,6 +6,7 @@ use crate::checks::keyframe::KeyframeSlack;
 use crate::checks::{collision, goals, grasp, keyframe, line, release, slip};
 use crate::contacts::{ContactLimits, ContactPoint};
 use crate::grasp::GraspLimits;
+use crate::interrupt::Interrupt;
 use crate::perception::{perceive, PoseNoise};
 use crate::report::{rank, Cause, Failure, Tracking, TrialReport};
 use crate::simulate::simulate;
@@ -48,6 +49,10 @@ pub struct ExecOptions {
     pub rest_speed: f64,
     /// Samples per simulated second of the objects' paths.
     pub path_rate: f64,
+    /// Raised to stop part-way (Ctrl-C): once it is, batches start no more trials (see
+    /// [`crate::interrupt`]). Never raised by default. Not a setting of the trials themselves:
+    /// it changes which trials run, never what one of them gives.
+    pub interrupt: Interrupt,
 }
 
 impl Default for ExecOptions {
@@ -66,6 +71,7 @@ impl Default for ExecOptions {
             settle_max: 2.0,
             rest_speed: 0.01,
             path_rate: 240.0,
+            interrupt: Interrupt::NEVER,
         }
     }
 }

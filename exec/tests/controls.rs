@@ -120,7 +120,11 @@ fn a_trials_earliest_failure_is_its_root_cause() {
     let failed = report.trials - report.passed;
     assert_eq!(report.failures.values().sum::<usize>(), failed);
     assert_eq!(report.failures.get(&Cause::Collision), Some(&failed));
-    assert!(report.secondary[&Cause::GoalNotMet] >= both, "{:?}", report.secondary);
+    assert!(
+        report.secondary[&Cause::GoalNotMet] >= both,
+        "{:?}",
+        report.secondary
+    );
     assert!(
         report.secondary.contains_key(&Cause::GraspFailed),
         "{:?}",

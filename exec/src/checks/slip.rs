@@ -61,6 +61,10 @@ mod tests {
         assert_eq!((f[0].cause, f[0].t), (Cause::Slipped, Some(2.26)));
         assert!(f[0].detail.contains("load (25 N)"), "{}", f[0].detail);
         let f = check(&[held(0.012, None, Some(2.24))], 0.005);
-        assert_eq!(f[0].t, Some(2.24), "the weld's break when no time was noted");
+        assert_eq!(
+            f[0].t,
+            Some(2.24),
+            "the weld's break when no time was noted"
+        );
     }
 }
