@@ -59,14 +59,22 @@ pub enum Command {
     /// Trial i uses seed S + i for both the placement and the planner, so a run is
     /// reproducible whatever --jobs is.
     ///
-    /// Prints the trials, how many passed, the failures by cause (unreachable, no plan,
-    /// collision, grasp failed, keyframe missed, line deviation, goal not met), the worst line
-    /// deviation and the time per trial, then the failed trials and what failed. A progress
-    /// bar shows on standard error when it is a terminal.
+    /// A trial's failures are ordered by the simulated time they occurred; the first is its
+    /// root cause. Prints the trials, how many passed, the failed trials counted by root cause
+    /// (unreachable, no plan, collision, grasp failed, keyframe missed, line deviation, goal
+    /// not met; these add up to the failed trials), the causes also seen in failed trials but
+    /// not as their root, the worst line deviation and the time per trial, then the failed
+    /// trials and their root cause. A progress bar shows on standard error when it is a
+    /// terminal.
+    ///
+    /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: the trials under way finish, the
+    /// summary of the finished ones is printed and the report written with "interrupted":
+    /// true (no trace); a second signal exits at once.
     ///
     /// Exit codes: 0 every trial passed; 1 some trial failed (or an output cannot be written);
     /// 2 bad input (a missing or invalid spec file, an unknown task, a spec naming objects the
-    /// task does not have, a bad option value or output folder).
+    /// task does not have, a bad option value or output folder); 130 interrupted by SIGINT or
+    /// SIGTERM (with --grounding-check too).
     Execute(ExecuteArgs),
     /// How much freedom a spec leaves the planner: bits of freedom, and what the planner makes
     /// of it in randomized scenes.
@@ -127,8 +135,12 @@ pub enum Command {
     /// planner over --scenes randomized scenes (as `akl flexibility`); the pass rate and the
     /// verdict from `akl validate` with --randomize trials.
     ///
+    /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: the specs compared so far are printed
+    /// (the one under way with the trials it finished and no verdict) and marked interrupted; a
+    /// second signal exits at once.
+    ///
     /// Exit codes: 0 compared (whatever the verdicts); 2 bad input (a missing or invalid spec,
-    /// named); 1 anything else.
+    /// named); 130 interrupted by SIGINT or SIGTERM; 1 anything else.
     Compare(CompareArgs),
     /// The whole loop on a built-in task: teach, learn, then execute with randomized objects.
     ///
@@ -161,8 +173,12 @@ pub enum Command {
     /// shows on standard error when it is a terminal. The same seed gives the same study
     /// (runtimes aside).
     ///
+    /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: the trials under way finish (with
+    /// their executions), and the tables and --out records cover the finished trials, marked
+    /// interrupted; a second signal exits at once.
+    ///
     /// Exit codes: 0 the study ran; 2 bad input (no participants, --execute 0, an output
-    /// folder that is a file); 1 anything else.
+    /// folder that is a file); 130 interrupted by SIGINT or SIGTERM; 1 anything else.
     Eval(EvalArgs),
 }
 

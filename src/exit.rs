@@ -1,4 +1,5 @@
-//! The CLI's error type and exit codes: 2 for bad input, 1 for internal failures.
+//! The CLI's error type and exit codes: 2 for bad input, 1 for internal failures, 130 for a run
+//! stopped by a signal.
 
 use std::fmt::Display;
 
@@ -6,6 +7,9 @@ use std::fmt::Display;
 pub const BAD_INPUT: u8 = 2;
 /// Exit code for failures that are not the input's fault (an output that cannot be written).
 pub const INTERNAL: u8 = 1;
+/// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report Ctrl-C),
+/// after it reported the trials that finished.
+pub const INTERRUPTED: u8 = 130;
 
 /// A failed command: one line of message and the process exit code.
 #[derive(Debug)]
@@ -21,6 +25,14 @@ impl CliError {
     pub fn input(message: impl Display) -> Self {
         CliError {
             code: BAD_INPUT,
+            message: message.to_string(),
+        }
+    }
+
+    /// A run stopped by a signal, having reported what finished (exit code 130).
+    pub fn interrupted(message: impl Display) -> Self {
+        CliError {
+            code: INTERRUPTED,
             message: message.to_string(),
         }
     }

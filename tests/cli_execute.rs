@@ -132,6 +132,7 @@ fn the_table_counts_failures_by_cause_and_a_failed_trial_exits_1() {
         ("failed: dropped", "0"),
         ("failed: line deviation", "0"),
         ("failed: goal not met", "0"),
+        ("also seen (not root)", "none"),
         ("perception noise (σ)", "2.0 mm, 1.0°"),
     ] {
         assert!(
@@ -145,6 +146,7 @@ fn the_table_counts_failures_by_cause_and_a_failed_trial_exits_1() {
         "deepest contact",
         "largest contact force",
         "time per trial",
+        "failed trials (root cause first):",
         "trial 0 (seed 0): unreachable: keyframe 1",
     ] {
         assert!(out.contains(row), "no `{row}` in\n{out}");
@@ -498,6 +500,14 @@ fn json_failures_name_their_keyframe() {
         assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
         let report = json(&o);
         let failures = report["reports"][0]["failures"].as_array().unwrap();
+        // In time order, the first the root cause.
+        let times: Vec<f64> = failures.iter().map(|f| f["t"].as_f64().unwrap()).collect();
+        assert!(times.windows(2).all(|w| w[0] <= w[1]), "{name}: {times:?}");
+        let roots: Vec<bool> = failures.iter().map(|f| f["root"] == true).collect();
+        assert!(
+            roots[0] && !roots[1..].contains(&true),
+            "{name}: {failures:?}"
+        );
         let named = failures.iter().find(|f| f["cause"] == cause);
         let named = named.unwrap_or_else(|| panic!("{name}: no {cause} in {failures:?}"));
         assert_eq!(named["keyframe"], keyframe, "{name}: {named}");

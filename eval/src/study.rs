@@ -1,6 +1,7 @@
 //! Running the study: every participant calibrates, then teaches every task with every method
 //! in its Latin-square order, and every learned spec is scored (thesis §4.2, §4.4).
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use akl_learn::calibration::Calibration;
@@ -41,6 +42,10 @@ pub struct StudyOptions<'a> {
     pub tasks: &'a [Task],
     /// Executes each learned spec this many times when an executor is given.
     pub execute: Option<(&'a dyn Executor, usize)>,
+    /// Raised to stop part-way (Ctrl-C): once it is, no participant starts another trial; the
+    /// trials under way (their executions included) finish, and the study holds those that
+    /// did ([`Study::interrupted`]). `None`: never stopped.
+    pub stop: Option<&'a AtomicBool>,
 }
 
 /// Why a study could not run.
@@ -161,6 +166,9 @@ pub struct Calibrated {
 pub struct Study {
     /// Seed of the study.
     pub seed: u64,
+    /// Whether it was stopped (Ctrl-C) before every trial had run: `trials` then holds, for
+    /// each participant, the trials it finished, in its order.
+    pub interrupted: bool,
     /// The population the participants were drawn from.
     pub population: Population,
     /// The participants.
@@ -175,6 +183,7 @@ pub struct Study {
 /// parallel (each participant's trials in order, since what a participant learns from the
 /// learner's suggestions carries into its later demonstrations); `progress` is called after
 /// every trial. The same seed gives the same study (runtimes aside) whatever the threads.
+/// Once `options.stop` is raised no trial starts (see [`StudyOptions::stop`]).
 pub fn run_study(
     options: &StudyOptions,
     progress: &(dyn Fn(&Trial) + Sync),
@@ -192,12 +201,18 @@ pub fn run_study(
         .map(|p| run_participant(p, options, progress))
         .collect::<Result<_, _>>()?;
     let (calibrations, trials) = results.into_iter().unzip::<_, _, Vec<_>, Vec<Vec<_>>>();
+    let planned: usize = participants
+        .iter()
+        .map(|p| p.order.len() * options.tasks.len())
+        .sum();
+    let trials: Vec<Trial> = trials.into_iter().flatten().collect();
     Ok(Study {
         seed: options.seed,
+        interrupted: trials.len() < planned,
         population,
         participants,
         calibrations,
-        trials: trials.into_iter().flatten().collect(),
+        trials,
     })
 }
 
@@ -237,8 +252,12 @@ fn run_participant(
     };
     let mut teacher = p.profile;
     let mut trials = Vec::with_capacity(3 * options.tasks.len());
+    let stopped = || options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
     for (position, method) in p.order.iter().enumerate() {
         for (k, task) in options.tasks.iter().enumerate() {
+            if stopped() {
+                return Ok((calibrated, trials));
+            }
             let seed = trial_seed(p.seed, *method, k);
             let setting = Setting {
                 participant: p,
@@ -473,6 +492,7 @@ mod tests {
             seed: 5,
             tasks: &tasks,
             execute: None,
+            stop: None,
         };
         let count = std::sync::atomic::AtomicUsize::new(0);
         let study = run_study(&options, &|_| {
@@ -480,6 +500,7 @@ mod tests {
         })
         .unwrap();
         assert_eq!(study.trials.len(), 27);
+        assert!(!study.interrupted);
         assert_eq!(count.into_inner(), 27);
         for p in &study.participants {
             let mine: Vec<_> = study
@@ -510,12 +531,47 @@ mod tests {
     }
 
     #[test]
+    fn a_stopped_study_keeps_the_trials_that_finished() {
+        let tasks = tasks();
+        let stop = AtomicBool::new(false);
+        let options = StudyOptions {
+            participants: 1,
+            seed: 5,
+            tasks: &tasks,
+            execute: None,
+            stop: Some(&stop),
+        };
+        let count = std::sync::atomic::AtomicUsize::new(0);
+        let mut stopped = run_study(&options, &|_| {
+            if count.fetch_add(1, Ordering::SeqCst) + 1 == 4 {
+                stop.store(true, Ordering::SeqCst);
+            }
+        })
+        .unwrap();
+        assert!(stopped.interrupted);
+        assert_eq!(stopped.trials.len(), 4);
+        let mut whole = run_study(
+            &StudyOptions {
+                stop: None,
+                ..options
+            },
+            &|_| {},
+        )
+        .unwrap();
+        for t in stopped.trials.iter_mut().chain(whole.trials.iter_mut()) {
+            t.runtime_s = 0.0;
+        }
+        assert_eq!(stopped.trials[..], whole.trials[..4]);
+    }
+
+    #[test]
     fn a_study_needs_people_tasks_and_truths() {
         let none = StudyOptions {
             participants: 0,
             seed: 0,
             tasks: &[],
             execute: None,
+            stop: None,
         };
         assert_eq!(run_study(&none, &|_| {}), Err(StudyError::Empty));
         let mut tasks = tasks();
@@ -525,6 +581,7 @@ mod tests {
             seed: 0,
             tasks: &tasks,
             execute: None,
+            stop: None,
         };
         assert_eq!(
             run_study(&untrue, &|_| {}),

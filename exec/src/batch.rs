@@ -3,6 +3,9 @@
 //! Trial i places the objects with seed `seed + i` (or leaves them where the task file has
 //! them) and plans with the same seed. Each trial builds its own rapier world and runs
 //! single-threaded, so a batch gives the same reports whatever the number of threads.
+//!
+//! Once the options' [`crate::interrupt::Interrupt`] is raised no trial starts; those under
+//! way finish, and the report covers the trials that finished, in trial order.
 
 use crate::error::ExecError;
 use crate::report::{BatchReport, Settings, TrialReport};
@@ -72,7 +75,9 @@ impl<'a> Batch<'a> {
     }
 
     /// Runs every trial on [`BatchOptions::jobs`] threads, calling `progress` after each
-    /// (from the worker that ran it).
+    /// (from the worker that ran it). Once [`ExecOptions::interrupt`] is raised no more trials
+    /// start: the report then holds the trials that finished (in trial order, each the same as
+    /// in an uninterrupted run) and is [`BatchReport::interrupted`] if any trial did not run.
     pub fn run(&self, progress: &(dyn Fn(&TrialReport) + Sync)) -> Result<BatchReport, ExecError> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.options.jobs)
@@ -81,17 +86,22 @@ impl<'a> Batch<'a> {
                 ExecError::Options(format!("cannot start {} jobs: {e}", self.options.jobs))
             })?;
         let started = Instant::now();
+        let interrupt = self.setup.options.interrupt;
         let reports: Vec<TrialReport> = pool.install(|| {
             (0..self.options.trials)
                 .into_par_iter()
-                .map(|i| {
+                .filter_map(|i| {
+                    if interrupt.raised() {
+                        return None;
+                    }
                     let r = self.trial(i, None);
                     progress(&r);
-                    r
+                    Some(r)
                 })
                 .collect()
         });
-        Ok(BatchReport::new(
+        let interrupted = reports.len() < self.options.trials;
+        let mut report = BatchReport::new(
             &self.setup.task.name,
             &self.setup.spec.method,
             self.options.seed,
@@ -100,7 +110,9 @@ impl<'a> Batch<'a> {
             self.options.jobs,
             started.elapsed().as_secs_f64(),
             settings(self.setup.options, self.setup.spec),
-        ))
+        );
+        report.interrupted = interrupted;
+        Ok(report)
     }
 
     /// Runs trial `i` alone (it gives the same report as in the batch), recording its frames
@@ -241,6 +253,50 @@ mod tests {
             assert_eq!(strip(again), strip(x));
             assert!(timeline.frames.len() > 30 && timeline.plan.is_some());
         }
+    }
+
+    #[test]
+    fn an_interrupted_batch_reports_the_trials_that_finished() {
+        use crate::interrupt::Interrupt;
+        use std::sync::atomic::AtomicBool;
+        static STOP: AtomicBool = AtomicBool::new(false);
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let exec = ExecOptions {
+            interrupt: Interrupt::on(&STOP),
+            ..ExecOptions::default()
+        };
+        let options = BatchOptions {
+            trials: 5,
+            randomize: true,
+            seed: 11,
+            jobs: 1,
+        };
+        let batch = Batch::new(&robot, &task, &spec, &exec, options).unwrap();
+        // Raised while trial 1 finishes: trials 0 and 1 are kept, 2 to 4 never start.
+        let report = batch
+            .run(&|r| {
+                if r.trial == 1 {
+                    STOP.store(true, Ordering::SeqCst);
+                }
+            })
+            .unwrap();
+        assert!(report.interrupted);
+        assert_eq!(report.trials, 2);
+        let kept: Vec<usize> = report.reports.iter().map(|r| r.trial).collect();
+        assert_eq!(kept, [0, 1]);
+        let whole = Batch::new(&robot, &task, &spec, &ExecOptions::default(), options)
+            .unwrap()
+            .run(&|_| {})
+            .unwrap();
+        assert!(!whole.interrupted && whole.trials == 5);
+        assert_eq!(
+            strip(report.reports[1].clone()),
+            strip(whole.reports[1].clone())
+        );
+        let none = batch.run(&|_| {}).unwrap();
+        assert!(none.interrupted && none.trials == 0 && none.reports.is_empty());
     }
 
     #[test]

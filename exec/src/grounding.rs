@@ -80,7 +80,7 @@ pub struct Alternative {
     pub trials: usize,
     /// Trials failed.
     pub failed: usize,
-    /// How many failed trials failed for each cause.
+    /// How many failed trials had each root cause (these add up to `failed`).
     pub causes: BTreeMap<Cause, usize>,
 }
 
@@ -93,6 +93,17 @@ pub struct KeyframeGroundings {
     pub reference: String,
     /// Every other object and the world.
     pub alternatives: Vec<Alternative>,
+}
+
+/// The grounding sensitivity of a whole spec, as far as the check got.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Groundings {
+    /// Whether the check was stopped (Ctrl-C) before it had measured every alternative: then
+    /// `keyframes` holds what it measured, the last alternative possibly on fewer trials than
+    /// asked (its `trials` says how many).
+    pub interrupted: bool,
+    /// Every keyframe, in order, with its alternatives.
+    pub keyframes: Vec<KeyframeGroundings>,
 }
 
 impl KeyframeGroundings {
@@ -219,7 +230,8 @@ pub fn equivalence(task: &Task, spec: &TaskSpec, k: usize, a: &str, b: &str) -> 
 }
 
 /// Measures every keyframe's grounding sensitivity; `progress` is called after each
-/// alternative with (done, total).
+/// alternative with (done, total). Once `exec.interrupt` is raised no further alternative is
+/// measured, and the result, [`Groundings::interrupted`], holds those that were.
 pub fn check_groundings(
     robot: &Robot,
     task: &Task,
@@ -227,7 +239,7 @@ pub fn check_groundings(
     exec: &ExecOptions,
     options: &GroundingOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Vec<KeyframeGroundings>, ExecError> {
+) -> Result<Groundings, ExecError> {
     spec.validate()?;
     spec.check_references(task.world.names())?;
     let poses = nominal_poses(task, spec);
@@ -240,9 +252,14 @@ pub fn check_groundings(
     let total = spec.keyframes.len() * (names.len() - 1);
     let mut done = 0;
     let mut out = Vec::with_capacity(spec.keyframes.len());
+    let mut interrupted = false;
     for (k, kf) in spec.keyframes.iter().enumerate() {
         let mut alternatives = Vec::new();
         for other in names.iter().filter(|n| **n != kf.reference) {
+            if exec.interrupt.raised() {
+                interrupted = true;
+                break;
+            }
             let alternative = match equivalence(task, spec, k, &kf.reference, other) {
                 Some(because) => Alternative {
                     reference: other.clone(),
@@ -255,22 +272,37 @@ pub fn check_groundings(
                     let wrong = regrounded(spec, k, other, &poses[k]).ok_or_else(|| {
                         ExecError::Options(format!("keyframe {k}: cannot re-ground on {other}"))
                     })?;
-                    measure(robot, task, &wrong, exec, options, other)?
+                    let (alternative, cut) = measure(robot, task, &wrong, exec, options, other)?;
+                    interrupted |= cut;
+                    if alternative.trials == 0 {
+                        break;
+                    }
+                    alternative
                 }
             };
             alternatives.push(alternative);
             done += 1;
             progress(done, total);
         }
-        out.push(KeyframeGroundings {
-            keyframe: k,
-            reference: kf.reference.clone(),
-            alternatives,
-        });
+        if !alternatives.is_empty() {
+            out.push(KeyframeGroundings {
+                keyframe: k,
+                reference: kf.reference.clone(),
+                alternatives,
+            });
+        }
+        if interrupted {
+            break;
+        }
     }
-    Ok(out)
+    Ok(Groundings {
+        interrupted,
+        keyframes: out,
+    })
 }
 
+/// Executes `wrong` (re-grounded on `other`) in the check's trials; also says whether the batch
+/// was interrupted.
 fn measure(
     robot: &Robot,
     task: &Task,
@@ -278,7 +310,7 @@ fn measure(
     exec: &ExecOptions,
     options: &GroundingOptions,
     other: &str,
-) -> Result<Alternative, ExecError> {
+) -> Result<(Alternative, bool), ExecError> {
     let batch = Batch::new(
         robot,
         task,
@@ -298,13 +330,16 @@ fn measure(
     } else {
         Verdict::NotDistinguished
     };
-    Ok(Alternative {
-        reference: other.to_string(),
-        verdict,
-        trials: report.trials,
-        failed,
-        causes: report.failures,
-    })
+    Ok((
+        Alternative {
+            reference: other.to_string(),
+            verdict,
+            trials: report.trials,
+            failed,
+            causes: report.failures,
+        },
+        report.interrupted,
+    ))
 }
 
 #[cfg(test)]
@@ -312,6 +347,23 @@ mod tests {
     use super::*;
     use akl_scene::builtin;
     use akl_tsr::pose::position_distance;
+
+    #[test]
+    fn a_check_interrupted_before_it_starts_measures_nothing() {
+        use crate::interrupt::Interrupt;
+        use std::sync::atomic::AtomicBool;
+        static RAISED: AtomicBool = AtomicBool::new(true);
+        let robot = Robot::panda().unwrap();
+        let task = builtin::task("pick_place").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let exec = ExecOptions {
+            interrupt: Interrupt::on(&RAISED),
+            ..ExecOptions::default()
+        };
+        let options = GroundingOptions::default();
+        let g = check_groundings(&robot, &task, &spec, &exec, &options, &|_, _| {}).unwrap();
+        assert!(g.interrupted && g.keyframes.is_empty(), "{g:?}");
+    }
 
     #[test]
     fn a_regrounded_keyframe_keeps_its_nominal_world_pose() {

@@ -9,6 +9,7 @@ pub mod convert;
 pub mod error;
 pub mod grasp;
 pub mod grounding;
+pub mod interrupt;
 pub mod perception;
 pub mod report;
 pub mod simulate;

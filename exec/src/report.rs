@@ -112,17 +112,27 @@ pub struct Failure {
     /// that group failures; absent for failures of the whole trial (goals, the start).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub keyframe: Option<usize>,
+    /// When it occurred (simulated seconds): 0 for planning, the closing for a grasp, the first
+    /// step beyond the limit for a slip or a line, the contact for a collision, the reach for a
+    /// keyframe, the release for a drop, the end of settling for a goal. `null` when it has no
+    /// moment (a keyframe the plan never reaches). The failures of a trial are in this order.
+    pub t: Option<f64>,
+    /// Whether this is the trial's root cause: its earliest failure, which the others may
+    /// follow from. Exactly one failure of a failed trial has it (the first).
+    pub root: bool,
     /// What exactly failed, naming the keyframe, segment or objects.
     pub detail: String,
 }
 
 impl Failure {
-    /// A failure for `cause`, saying `detail`.
+    /// A failure for `cause`, saying `detail`, with no time yet and not the root.
     pub fn new(cause: Cause, detail: impl Into<String>) -> Failure {
         Failure {
             cause,
             stage: cause.stage(),
             keyframe: None,
+            t: None,
+            root: false,
             detail: detail.into(),
         }
     }
@@ -133,6 +143,27 @@ impl Failure {
             keyframe: keyframe.into(),
             ..self
         }
+    }
+
+    /// The same failure, occurring at simulated time `t` (seconds).
+    pub fn at_time(self, t: f64) -> Failure {
+        Failure { t: Some(t), ..self }
+    }
+}
+
+/// Puts a trial's failures in the order they occurred and marks the first as the root cause.
+///
+/// The sort is stable, so failures at the same time keep the order the checks gave them (grasp,
+/// slip, release, collision, keyframe, line, goals); failures with no time come last.
+pub fn rank(failures: &mut [Failure]) {
+    failures.sort_by(|a, b| match (a.t, b.t) {
+        (Some(x), Some(y)) => x.total_cmp(&y),
+        (Some(_), None) => std::cmp::Ordering::Less,
+        (None, Some(_)) => std::cmp::Ordering::Greater,
+        (None, None) => std::cmp::Ordering::Equal,
+    });
+    for (i, f) in failures.iter_mut().enumerate() {
+        f.root = i == 0;
     }
 }
 
@@ -237,7 +268,7 @@ pub struct TrialReport {
     pub seed: u64,
     /// Whether every check held.
     pub passed: bool,
-    /// The checks that failed.
+    /// The checks that failed, in the order they occurred; the first is the root cause.
     pub failures: Vec<Failure>,
     /// Where the objects randomization moves truly were (world poses): the movable objects and
     /// the furniture moved by its own range, its group's or that of what it stands on.
@@ -277,6 +308,21 @@ impl TrialReport {
         causes.sort();
         causes.dedup();
         causes
+    }
+
+    /// The trial's root cause: its first failure, the earliest once [`rank`]ed, if it failed.
+    pub fn root(&self) -> Option<&Failure> {
+        self.failures.first()
+    }
+
+    /// The distinct causes of the trial's failures other than its root's cause: what went
+    /// wrong besides (often because of) the root cause.
+    pub fn secondary_causes(&self) -> Vec<Cause> {
+        let root = self.root().map(|f| f.cause);
+        self.causes()
+            .into_iter()
+            .filter(|c| Some(*c) != root)
+            .collect()
     }
 
     /// The largest line deviation of the trial, if it has lines.
@@ -343,12 +389,18 @@ pub struct BatchReport {
     pub seed: u64,
     /// Whether objects were moved within the task's ranges.
     pub randomized: bool,
-    /// Number of trials.
+    /// Number of trials run (fewer than asked when interrupted).
     pub trials: usize,
     /// Number that passed.
     pub passed: usize,
-    /// For each cause, how many trials failed (at least) for it.
+    /// Whether the batch was stopped (Ctrl-C) before every trial asked for had started: the
+    /// report covers only the trials that finished.
+    pub interrupted: bool,
+    /// For each cause, how many failed trials it was the root cause of (see [`rank`]); these
+    /// add up to the failed trials.
     pub failures: BTreeMap<Cause, usize>,
+    /// For each cause, how many failed trials it occurred in without being their root cause.
+    pub secondary: BTreeMap<Cause, usize>,
     /// The largest line deviation over all trials (metres), if the spec has lines.
     pub worst_line_deviation: Option<f64>,
     /// Mean wall-clock seconds per trial (planning plus simulation).
@@ -363,13 +415,13 @@ pub struct BatchReport {
     pub jobs: usize,
     /// What the trials measured against.
     pub settings: Settings,
-    /// Every trial, in order.
+    /// Every trial run, in order.
     pub reports: Vec<TrialReport>,
 }
 
 impl BatchReport {
     /// Summarizes `reports` (in trial order) run on `jobs` threads in `wall_seconds` with
-    /// `settings`.
+    /// `settings`; not interrupted (the caller sets [`BatchReport::interrupted`] when it was).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         task: &str,
@@ -382,9 +434,13 @@ impl BatchReport {
         settings: Settings,
     ) -> BatchReport {
         let mut failures: BTreeMap<Cause, usize> = BTreeMap::new();
+        let mut secondary: BTreeMap<Cause, usize> = BTreeMap::new();
         for r in &reports {
-            for c in r.causes() {
-                *failures.entry(c).or_default() += 1;
+            if let Some(root) = r.root() {
+                *failures.entry(root.cause).or_default() += 1;
+            }
+            for c in r.secondary_causes() {
+                *secondary.entry(c).or_default() += 1;
             }
         }
         let n = reports.len().max(1) as f64;
@@ -398,7 +454,9 @@ impl BatchReport {
             randomized,
             trials: reports.len(),
             passed: reports.iter().filter(|r| r.passed).count(),
+            interrupted: false,
             failures,
+            secondary,
             worst_line_deviation: reports
                 .iter()
                 .filter_map(TrialReport::worst_line_deviation)
@@ -434,15 +492,18 @@ impl BatchReport {
 mod tests {
     use super::*;
 
-    fn trial(i: usize, causes: &[Cause], deviation: Option<f64>) -> TrialReport {
+    /// A trial whose failures are `failures` (cause, time), ranked as a trial ranks them.
+    fn trial(i: usize, failures: &[(Cause, f64)], deviation: Option<f64>) -> TrialReport {
+        let mut failures: Vec<Failure> = failures
+            .iter()
+            .map(|(c, t)| Failure::new(*c, String::new()).at_time(*t))
+            .collect();
+        rank(&mut failures);
         TrialReport {
             trial: i,
             seed: i as u64,
-            passed: causes.is_empty(),
-            failures: causes
-                .iter()
-                .map(|c| Failure::new(*c, String::new()))
-                .collect(),
+            passed: failures.is_empty(),
+            failures,
             placements: BTreeMap::new(),
             perceived: BTreeMap::new(),
             plan_seconds: 0.1,
@@ -471,22 +532,13 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_batch_counts_each_cause_once_per_trial() {
-        let b = BatchReport::new(
+    fn batch(reports: Vec<TrialReport>) -> BatchReport {
+        BatchReport::new(
             "t",
             "truth",
             0,
             true,
-            vec![
-                trial(0, &[], Some(0.001)),
-                trial(
-                    1,
-                    &[Cause::Collision, Cause::Collision, Cause::GoalNotMet],
-                    Some(0.004),
-                ),
-                trial(2, &[Cause::Unreachable], None),
-            ],
+            reports,
             2,
             1.0,
             crate::batch::settings(
@@ -497,16 +549,81 @@ mod tests {
                     .truth
                     .unwrap(),
             ),
+        )
+    }
+
+    #[test]
+    fn failures_are_ranked_by_time_and_the_earliest_is_the_root() {
+        // In the checks' order: slip before collision before goals, but the collision came
+        // first; the untimed keyframe failure goes last, ties keep the checks' order.
+        let mut failures = vec![
+            Failure::new(Cause::Slipped, "slipped").at_time(2.26),
+            Failure::new(Cause::Collision, "touched wall_e").at_time(2.25),
+            Failure::new(Cause::Collision, "touched wall_w").at_time(2.26),
+            Failure::new(Cause::KeyframeMissed, "never reached"),
+            Failure::new(Cause::GoalNotMet, "on(tube, rack)").at_time(4.0),
+        ];
+        rank(&mut failures);
+        let order: Vec<&str> = failures.iter().map(|f| f.detail.as_str()).collect();
+        assert_eq!(
+            order,
+            [
+                "touched wall_e",
+                "slipped",
+                "touched wall_w",
+                "on(tube, rack)",
+                "never reached"
+            ]
         );
-        assert_eq!((b.trials, b.passed), (3, 1));
+        let roots: Vec<bool> = failures.iter().map(|f| f.root).collect();
+        assert_eq!(roots, [true, false, false, false, false]);
+        let json = serde_json::to_value(&failures).unwrap();
+        assert_eq!(json[0]["root"], true);
+        assert_eq!(json[0]["t"], 2.25);
+        assert_eq!(json[1]["root"], false);
+        assert!(json[4]["t"].is_null());
+    }
+
+    #[test]
+    fn a_batch_counts_failed_trials_by_root_cause_and_the_rest_apart() {
+        let b = batch(vec![
+            trial(0, &[], Some(0.001)),
+            trial(
+                1,
+                &[
+                    (Cause::GoalNotMet, 5.0),
+                    (Cause::Collision, 1.0),
+                    (Cause::Collision, 2.0),
+                    (Cause::Slipped, 1.5),
+                ],
+                Some(0.004),
+            ),
+            trial(2, &[(Cause::Unreachable, 0.0)], None),
+            trial(3, &[(Cause::Slipped, 3.0), (Cause::Collision, 3.5)], None),
+        ]);
+        assert_eq!((b.trials, b.passed), (4, 1));
+        assert!(!b.interrupted);
         assert_eq!(b.settings.spec_hash.len(), 64);
-        assert_eq!(b.failures[&Cause::Collision], 1);
-        assert_eq!(b.failures[&Cause::GoalNotMet], 1);
-        assert_eq!(b.failures[&Cause::Unreachable], 1);
+        let roots: BTreeMap<Cause, usize> = [
+            (Cause::Unreachable, 1),
+            (Cause::Collision, 1),
+            (Cause::Slipped, 1),
+        ]
+        .into();
+        assert_eq!(b.failures, roots);
+        assert_eq!(b.failures.values().sum::<usize>(), b.trials - b.passed);
+        let secondary: BTreeMap<Cause, usize> = [
+            (Cause::Collision, 1),
+            (Cause::Slipped, 1),
+            (Cause::GoalNotMet, 1),
+        ]
+        .into();
+        assert_eq!(b.secondary, secondary);
         assert_eq!(b.worst_line_deviation, Some(0.004));
         assert!((b.seconds_per_trial - 0.4).abs() < 1e-12);
         assert!(!b.all_passed());
         let json = b.to_json().unwrap();
-        assert!(json.contains("\"goal_not_met\": 1"), "{json}");
+        assert!(json.contains("\"interrupted\": false"), "{json}");
+        assert!(json.contains("\"secondary\": {"), "{json}");
     }
 }

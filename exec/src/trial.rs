@@ -6,8 +6,9 @@ use crate::checks::keyframe::KeyframeSlack;
 use crate::checks::{collision, goals, grasp, keyframe, line, release, slip};
 use crate::contacts::{ContactLimits, ContactPoint};
 use crate::grasp::GraspLimits;
+use crate::interrupt::Interrupt;
 use crate::perception::{perceive, PoseNoise};
-use crate::report::{Cause, Failure, Tracking, TrialReport};
+use crate::report::{rank, Cause, Failure, Tracking, TrialReport};
 use crate::simulate::simulate;
 use crate::world::Physics;
 use akl_planner::{plan_task, Plan, PlanError, PlanOptions, Robot};
@@ -48,6 +49,10 @@ pub struct ExecOptions {
     pub rest_speed: f64,
     /// Samples per simulated second of the objects' paths.
     pub path_rate: f64,
+    /// Raised to stop part-way (Ctrl-C): once it is, batches start no more trials (see
+    /// [`crate::interrupt`]). Never raised by default. Not a setting of the trials themselves:
+    /// it changes which trials run, never what one of them gives.
+    pub interrupt: Interrupt,
 }
 
 impl Default for ExecOptions {
@@ -66,6 +71,7 @@ impl Default for ExecOptions {
             settle_max: 2.0,
             rest_speed: 0.01,
             path_rate: 240.0,
+            interrupt: Interrupt::NEVER,
         }
     }
 }
@@ -157,7 +163,8 @@ fn poses_of<'w>(
 
 /// Runs trial `trial` in `world` (the true placements): perceives it with the trial's
 /// `seed`, plans on what was perceived with the same seed, simulates in `world`, and judges.
-/// Records the simulation into `timeline` when given.
+/// Its failures come in the order they occurred, the first its root cause ([`rank`]). Records
+/// the simulation into `timeline` when given.
 pub fn run_trial(
     setup: &Setup,
     trial: usize,
@@ -213,10 +220,13 @@ pub fn run_trial(
             let started = Instant::now();
             match simulate(setup, world, &plan, timeline) {
                 Some(obs) => judge(setup, &obs, &mut report),
-                None => report.failures.push(Failure::new(
-                    Cause::NoPlan,
-                    "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link)",
-                )),
+                None => report.failures.push(
+                    Failure::new(
+                        Cause::NoPlan,
+                        "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link)",
+                    )
+                    .at_time(0.0),
+                ),
             }
             report.sim_seconds = started.elapsed().as_secs_f64();
         }
@@ -224,11 +234,14 @@ pub fn run_trial(
             if let Some(tl) = timeline {
                 tl.planning_failure = Some(e.to_string());
             }
-            report
-                .failures
-                .push(Failure::new(plan_cause(&e), e.to_string()).at(e.keyframe()));
+            report.failures.push(
+                Failure::new(plan_cause(&e), e.to_string())
+                    .at(e.keyframe())
+                    .at_time(0.0),
+            );
         }
     }
+    rank(&mut report.failures);
     report.passed = report.failures.is_empty();
     report
 }
@@ -238,7 +251,12 @@ fn judge(setup: &Setup, obs: &crate::simulate::Observations, report: &mut TrialR
     let options = setup.options;
     let (grasps, mut failures) = grasp::check(&obs.grasps);
     failures.extend(slip::check(&obs.grasps, options.slip_limit));
-    let (releases, dropped) = release::check(&obs.releases, &obs.still_held, options.drop_limit);
+    let (releases, dropped) = release::check(
+        &obs.releases,
+        &obs.still_held,
+        options.drop_limit,
+        obs.simulated,
+    );
     failures.extend(dropped);
     failures.extend(collision::check(obs.contacts.collisions()));
     let (keyframes, missed) = keyframe::check(setup.spec, &obs.reaches, &options.keyframe_slack());

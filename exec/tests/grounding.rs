@@ -38,7 +38,8 @@ fn verdicts(task: &str) -> (Named, Named) {
     .unwrap();
     let mut equivalent = Vec::new();
     let mut not_distinguished = Vec::new();
-    for k in &measured {
+    assert!(!measured.interrupted);
+    for k in &measured.keyframes {
         for a in &k.alternatives {
             match a.verdict {
                 Verdict::Equivalent { .. } => equivalent.push((k.keyframe, a.reference.clone())),

@@ -7,6 +7,7 @@ use crate::cli::CompareArgs;
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
+use akl_exec::trial::ExecOptions;
 use akl_scene::builtin;
 use akl_validate::compare::{compare, CompareOptions, Row};
 use akl_validate::ValidateOptions;
@@ -19,6 +20,7 @@ struct Compared {
     scenes: usize,
     budget_ms: u64,
     seed: u64,
+    interrupted: bool,
     rows: Vec<Row>,
 }
 
@@ -33,7 +35,10 @@ pub fn run(args: CompareArgs) -> CliResult {
     let options = CompareOptions {
         validate: ValidateOptions {
             trials: trials(args.randomize, args.seed, &args.trials)?,
-            exec: exec_options(&args.trials),
+            exec: ExecOptions {
+                interrupt: crate::stop::interrupt(),
+                ..exec_options(&args.trials)
+            },
         },
         scenes: args.scenes,
         budget_ms: args.budget,
@@ -48,19 +53,28 @@ pub fn run(args: CompareArgs) -> CliResult {
     progress.finish();
     // Every spec was loaded and checked against the task above, so an error here is the
     // task's or the run's, not a file's; clap guarantees at least one spec to name.
-    let rows = rows.map_err(|e| cli_error(e, &args.specs[0], &task))?;
+    let comparison = rows.map_err(|e| cli_error(e, &args.specs[0], &task))?;
     let compared = Compared {
         task: task.name.clone(),
         trials: args.randomize,
         scenes: args.scenes,
         budget_ms: args.budget,
         seed: args.seed,
-        rows,
+        interrupted: comparison.interrupted,
+        rows: comparison.rows,
     };
     if args.json {
-        return print_json(&compared);
+        print_json(&compared)?;
+    } else {
+        print_compared(&compared);
     }
-    print_compared(&compared);
+    if compared.interrupted {
+        return Err(CliError::interrupted(format!(
+            "interrupted: {} of {} specs compared, the last possibly on fewer trials",
+            compared.rows.len(),
+            specs.len()
+        )));
+    }
     Ok(())
 }
 
@@ -69,6 +83,9 @@ fn print_compared(c: &Compared) {
         "task `{}`: bits of freedom on the 5 cm lattice; planning over {} randomized scenes (budget {} ms); {} validation trials per spec (seeds {}..)",
         c.task, c.scenes, c.budget_ms, c.trials, c.seed
     );
+    if c.interrupted {
+        println!("interrupted: only the specs compared are listed");
+    }
     let mut table = Table::new([
         "spec",
         "method",
@@ -81,14 +98,14 @@ fn print_compared(c: &Compared) {
         "validation",
     ]);
     for r in &c.rows {
-        let verdict = if r.not_essential.is_empty() {
-            r.verdict.label().to_string()
-        } else {
-            format!(
+        let verdict = match r.verdict {
+            None => format!("interrupted after {} trials", r.trials),
+            Some(v) if r.not_essential.is_empty() => v.label().to_string(),
+            Some(v) => format!(
                 "{} (not essential: {})",
-                r.verdict.label(),
+                v.label(),
                 r.not_essential.join(", ")
-            )
+            ),
         };
         table.row(vec![
             r.spec.clone(),

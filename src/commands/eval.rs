@@ -53,6 +53,7 @@ impl Executor for Simulation {
 struct Evaluated<'a> {
     participants: usize,
     seed: u64,
+    interrupted: bool,
     executions_per_spec: Option<usize>,
     wall_s: f64,
     files: Vec<String>,
@@ -92,6 +93,7 @@ pub fn run(args: EvalArgs) -> CliResult {
             .as_ref()
             .zip(args.execute)
             .map(|(s, n)| (s as &dyn Executor, n)),
+        stop: Some(crate::stop::on_ctrl_c()),
     };
     let total = args.participants * 3 * tasks.len();
     let bar = ProgressBar::new(total as u64).with_style(
@@ -115,19 +117,27 @@ pub fn run(args: EvalArgs) -> CliResult {
         None => Vec::new(),
     };
     if args.json {
-        return print_json(&Evaluated {
+        print_json(&Evaluated {
             participants: args.participants,
             seed: args.seed,
+            interrupted: study.interrupted,
             executions_per_spec: args.execute,
             wall_s,
             files,
             summary: &summary,
             trials: study.trials.iter().collect(),
-        });
+        })?;
+    } else {
+        print_study(&study, &summary, wall_s);
+        for f in &files {
+            println!("wrote {f}");
+        }
     }
-    print_study(&study, &summary, wall_s);
-    for f in &files {
-        println!("wrote {f}");
+    if study.interrupted {
+        return Err(CliError::interrupted(format!(
+            "interrupted: {} of {total} trials finished",
+            study.trials.len()
+        )));
     }
     Ok(())
 }
@@ -157,6 +167,9 @@ fn print_study(study: &Study, summary: &Summary, wall_s: f64) {
         study.seed,
         study.trials.len()
     );
+    if study.interrupted {
+        println!("interrupted: only the trials that finished are counted");
+    }
     println!("\nsuccess rate, % (cf. thesis Table 4.1, case (a); thesis values in brackets)");
     let mut t = Table::new(["task", "KD", "mACL", "AKL"]);
     for row in &summary.success {

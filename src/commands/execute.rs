@@ -74,6 +74,7 @@ pub fn run(args: ExecuteArgs) -> CliResult {
             ..PlanOptions::default()
         },
         noise: pose_noise(args.pose_noise),
+        interrupt: crate::stop::interrupt(),
         ..ExecOptions::default()
     };
     if args.grounding_check {
@@ -110,6 +111,13 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         print_executed(&executed);
         print_outputs(&executed);
     }
+    if executed.report.interrupted {
+        return Err(CliError::interrupted(format!(
+            "interrupted: {} of {} trials finished",
+            executed.report.trials,
+            args.randomize.unwrap_or(1)
+        )));
+    }
     verdict(&executed.report)
 }
 
@@ -143,7 +151,9 @@ pub(crate) fn verdict(report: &BatchReport) -> CliResult {
     }
 }
 
-/// Runs the trials of `e`, showing progress, and writes the report and trace.
+/// Runs the trials of `e`, showing progress, and writes the report and trace. Once
+/// `e.options.interrupt` is raised no more trials start: the report of those that finished
+/// is written (marked interrupted) and the trace is not.
 pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
     if let Some(p) = e.trace {
         check_output(p, "trace")?;
@@ -192,7 +202,7 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
             .save(p)
             .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
     }
-    let trace_trial = match e.trace {
+    let trace_trial = match e.trace.filter(|_| !report.interrupted) {
         Some(p) => Some(
             batch
                 .write_trace(&report, e.trace_trial, p)
@@ -203,10 +213,25 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
     Ok(Executed {
         spec: e.spec_path.display().to_string(),
         report_file: written(e.report),
-        trace_file: written(e.trace),
+        trace_file: written(e.trace.filter(|_| trace_trial.is_some())),
         trace_trial,
         report,
     })
+}
+
+/// The causes seen in failed trials besides their root cause, e.g. `slipped 3, goal not met 5`
+/// (`none` if none).
+fn secondary(r: &BatchReport) -> String {
+    let seen: Vec<String> = r
+        .secondary
+        .iter()
+        .map(|(cause, n)| format!("{cause} {n}"))
+        .collect();
+    if seen.is_empty() {
+        "none".into()
+    } else {
+        seen.join(", ")
+    }
 }
 
 fn millimetres(metres: Option<f64>) -> String {
@@ -225,6 +250,12 @@ pub(crate) fn print_executed(x: &Executed) {
         "{}: {} spec on task `{}`, {placement}, {} in parallel",
         x.spec, r.method, r.task, r.jobs
     );
+    if r.interrupted {
+        println!(
+            "interrupted: only the {} trials that finished are counted",
+            r.trials
+        );
+    }
     let trials = r.trials.to_string();
     let mut table = Table::new(["trials", &trials]);
     let mut row = |a: &str, b: String| table.row(vec![a.to_string(), b]);
@@ -233,6 +264,7 @@ pub(crate) fn print_executed(x: &Executed) {
         let n = r.failures.get(&cause).copied().unwrap_or(0);
         row(&format!("failed: {cause}"), n.to_string());
     }
+    row("also seen (not root)", secondary(r));
     row("worst line deviation", millimetres(r.worst_line_deviation));
     let worst = |f: &dyn Fn(&akl_exec::report::TrialReport) -> f64| {
         r.reports.iter().map(f).fold(0.0, f64::max)
@@ -275,11 +307,10 @@ pub(crate) fn print_executed(x: &Executed) {
     print!("{}", table.render());
     let failed: Vec<_> = r.reports.iter().filter(|t| !t.passed).collect();
     if !failed.is_empty() {
-        println!("failed trials:");
+        println!("failed trials (root cause first):");
         for t in failed.iter().take(LISTED_FAILURES) {
             let first = t
-                .failures
-                .first()
+                .root()
                 .map_or(String::new(), |f| format!("{}: {}", f.cause, f.detail));
             let more = match t.failures.len() {
                 0 | 1 => String::new(),

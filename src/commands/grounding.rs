@@ -6,14 +6,15 @@ use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::error::ExecError;
-use akl_exec::grounding::{check_groundings, GroundingOptions, KeyframeGroundings, Verdict};
+use akl_exec::grounding::{check_groundings, GroundingOptions, Groundings, Verdict};
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_tsr::{FileError, TaskSpec};
 use std::path::Path;
 
-/// Runs the check with `trials` randomized trials per alternative and prints it.
+/// Runs the check with `trials` randomized trials per alternative and prints it; interrupted
+/// (`exec.interrupt`), it prints what it measured and exits 130.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     robot: &Robot,
@@ -42,9 +43,20 @@ pub fn run(
         other => CliError::input(other),
     })?;
     if json {
-        return print_json(&measured);
+        print_json(&measured)?;
+    } else {
+        print_groundings(spec_path, task, options, &measured);
     }
-    print_groundings(spec_path, task, options, &measured);
+    if measured.interrupted {
+        let done: usize = measured
+            .keyframes
+            .iter()
+            .map(|k| k.alternatives.len())
+            .sum();
+        return Err(CliError::interrupted(format!(
+            "interrupted: {done} of {alternatives} alternatives measured"
+        )));
+    }
     Ok(())
 }
 
@@ -52,7 +64,7 @@ fn print_groundings(
     spec_path: &Path,
     task: &Task,
     options: &GroundingOptions,
-    measured: &[KeyframeGroundings],
+    measured: &Groundings,
 ) {
     println!(
         "{}: each keyframe re-grounded on every other object of `{}`, {} randomized trials each \
@@ -63,7 +75,12 @@ fn print_groundings(
         options.seed,
         options.share * 100.0
     );
-    for k in measured {
+    if measured.interrupted {
+        println!(
+            "interrupted: only the alternatives measured are listed, the last possibly on fewer trials"
+        );
+    }
+    for k in &measured.keyframes {
         println!("keyframe {} (on {}):", k.keyframe, k.reference);
         let mut table = Table::new(["  re-grounded on", "failed", "verdict"]);
         for a in &k.alternatives {
@@ -92,6 +109,7 @@ fn print_groundings(
         print!("{}", table.render());
     }
     let weak: Vec<String> = measured
+        .keyframes
         .iter()
         .flat_map(|k| {
             k.not_distinguished()
@@ -99,7 +117,12 @@ fn print_groundings(
         })
         .collect();
     if weak.is_empty() {
-        println!("every other reference is distinguished or equivalent");
+        let measured = if measured.interrupted {
+            " measured"
+        } else {
+            ""
+        };
+        println!("every other reference{measured} is distinguished or equivalent");
     } else {
         println!(
             "the randomization cannot tell these from the spec's references: {}",

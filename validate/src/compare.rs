@@ -1,6 +1,9 @@
 //! Specs of one task side by side: how many keyframes and lines each has, the freedom it
 //! leaves the planner (bits of freedom), what the budgeted planner makes of it, how it executes
 //! and whether it passes validation.
+//!
+//! Once the validation's [`akl_exec::interrupt::Interrupt`] is raised (Ctrl-C) no further spec
+//! is compared; the spec under way keeps the trials it finished, without a verdict.
 
 use crate::validation::{validate, ValidateOptions, Verdict};
 use crate::ValidateError;
@@ -38,27 +41,48 @@ pub struct Row {
     pub plan_success: f64,
     /// The quickest plan's execution time over those scenes (seconds).
     pub best_duration: Option<f64>,
-    /// Share of the validation trials that passed.
+    /// Validation trials of the spec itself that ran (fewer than asked when interrupted).
+    pub trials: usize,
+    /// Share of those that passed.
     pub pass_rate: f64,
-    /// The validation verdict.
-    pub verdict: Verdict,
+    /// Whether its validation was interrupted (Ctrl-C) part-way.
+    pub interrupted: bool,
+    /// The validation verdict (`None` when interrupted: a validation cut short has none).
+    pub verdict: Option<Verdict>,
     /// What validation found superfluous (removals that passed every trial, contradicted
-    /// answers are not checked here).
+    /// answers are not checked here); empty when interrupted.
     pub not_essential: Vec<String>,
 }
 
+/// The rows of a comparison.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Whether it was interrupted (Ctrl-C) before every spec was compared: `rows` holds the
+    /// specs compared, the last possibly interrupted (see [`Row::interrupted`]).
+    pub interrupted: bool,
+    /// One row per spec, in the order given.
+    pub rows: Vec<Row>,
+}
+
 /// Compares `specs` (name, spec) on `task`; `progress` is called after each spec with
-/// (done, total).
+/// (done, total). Stops, and says so, once `options.validate.exec.interrupt` is raised.
 pub fn compare(
     robot: &Robot,
     task: &Task,
     specs: &[(String, TaskSpec)],
     options: &CompareOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Vec<Row>, ValidateError> {
+) -> Result<Comparison, ValidateError> {
+    let interrupt = options.validate.exec.interrupt;
     let workspace = Workspace::new(robot, task, &FreedomOptions::default())?;
     let mut rows = Vec::with_capacity(specs.len());
     for (done, (name, spec)) in specs.iter().enumerate() {
+        if interrupt.raised() {
+            return Ok(Comparison {
+                interrupted: true,
+                rows,
+            });
+        }
         let gains = planner_gains(
             robot,
             task,
@@ -73,6 +97,12 @@ pub fn compare(
             },
         )?;
         let validation = validate(robot, task, spec, &options.validate, None, &|_, _| {})?;
+        // Raised during the validation (or just after it): its trials may be cut short, so it
+        // gets no verdict.
+        let interrupted = interrupt.raised();
+        if interrupted && validation.outcome.run == 0 {
+            return Ok(Comparison { interrupted, rows });
+        }
         rows.push(Row {
             spec: name.clone(),
             method: spec.method.clone(),
@@ -81,11 +111,23 @@ pub fn compare(
             bits: workspace.bits(spec)?,
             plan_success: gains.success_rate,
             best_duration: gains.duration.map(|d| d.best),
+            trials: validation.outcome.run,
             pass_rate: validation.outcome.pass_rate(),
-            verdict: validation.verdict,
-            not_essential: validation.not_essential().map(|a| a.what.clone()).collect(),
+            interrupted,
+            verdict: (!interrupted).then_some(validation.verdict),
+            not_essential: if interrupted {
+                Vec::new()
+            } else {
+                validation.not_essential().map(|a| a.what.clone()).collect()
+            },
         });
         progress(done + 1, specs.len());
+        if interrupted {
+            return Ok(Comparison { interrupted, rows });
+        }
     }
-    Ok(rows)
+    Ok(Comparison {
+        interrupted: false,
+        rows,
+    })
 }

@@ -56,7 +56,7 @@ pub enum Stop {
 pub struct TrialFailure {
     /// Its seed.
     pub seed: u64,
-    /// Its first failure's cause.
+    /// Its root cause (its earliest failure's cause).
     pub cause: Cause,
     /// What failed.
     pub detail: String,
@@ -69,7 +69,8 @@ pub struct Outcome {
     pub run: usize,
     /// Trials that passed.
     pub passed: usize,
-    /// For each cause, the trials that failed (at least) for it.
+    /// For each cause, the failed trials it was the root cause of (these add up to the
+    /// failed trials).
     pub failures: BTreeMap<Cause, usize>,
     /// The first trial that failed, if any.
     pub first_failure: Option<TrialFailure>,
@@ -115,7 +116,7 @@ impl Outcome {
             .extend(report.reports.iter().filter(|r| !r.passed).map(|r| r.seed));
         if self.first_failure.is_none() {
             self.first_failure = report.reports.iter().find(|r| !r.passed).and_then(|r| {
-                r.failures.first().map(|f| TrialFailure {
+                r.root().map(|f| TrialFailure {
                     seed: r.seed,
                     cause: f.cause,
                     detail: f.detail.clone(),

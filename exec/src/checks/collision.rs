@@ -3,10 +3,14 @@
 use crate::contacts::Collision;
 use crate::report::{Cause, Failure};
 
-/// A failure for each pair that collided.
+/// A failure for each pair that collided, at its first offending contact.
 pub fn check(collisions: &[Collision]) -> Vec<Failure> {
     collisions
         .iter()
-        .map(|c| Failure::new(Cause::Collision, c.describe()).at(c.keyframe))
+        .map(|c| {
+            Failure::new(Cause::Collision, c.describe())
+                .at(c.keyframe)
+                .at_time(c.t)
+        })
         .collect()
 }

@@ -5,7 +5,7 @@ use crate::report::{Cause, Failure};
 use crate::simulate::observations::Observations;
 use akl_scene::{GoalCheck, Task};
 
-/// The goal checks, and a failure for each that does not hold.
+/// The goal checks, and a failure for each that does not hold, at the end of settling.
 pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck>, Vec<Failure>) {
     let mut goals: Vec<GoalCheck> = match &obs.settled {
         Some(world) => task.check_goals(world, &obs.paths),
@@ -15,7 +15,10 @@ pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck
     let failures = goals
         .iter()
         .filter(|g| !g.holds)
-        .map(|g| Failure::new(Cause::GoalNotMet, format!("{}: {}", g.goal, g.detail)))
+        .map(|g| {
+            Failure::new(Cause::GoalNotMet, format!("{}: {}", g.goal, g.detail))
+                .at_time(obs.simulated)
+        })
         .collect();
     (goals, failures)
 }

@@ -5,7 +5,7 @@ use crate::report::{Cause, Failure, GraspCheck};
 use crate::simulate::observations::GraspEvent;
 
 /// One check per closing of the gripper; a failure for each that did not hold the intended
-/// object soundly.
+/// object soundly, at the time the closing ended.
 pub fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
     let mut checks = Vec::with_capacity(grasps.len());
     let mut failures = Vec::new();
@@ -39,7 +39,8 @@ pub fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
                     Cause::GraspFailed,
                     format!("keyframe {}: {why}", g.keyframe),
                 )
-                .at(g.keyframe),
+                .at(g.keyframe)
+                .at_time(g.t),
             );
         }
         checks.push(GraspCheck {
@@ -77,6 +78,7 @@ mod tests {
             squared: 0.0,
             broke_at: None,
             slip: 0.0,
+            slipped_at: None,
             peak_load: 0.0,
         }
     }

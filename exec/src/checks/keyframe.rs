@@ -39,7 +39,8 @@ impl KeyframeSlack {
     }
 }
 
-/// One check per keyframe the plan reached; a failure for each missed or never reached.
+/// One check per keyframe the plan reached; a failure for each missed (at its reach time) or
+/// never reached (with no time).
 pub fn check(
     spec: &TaskSpec,
     reaches: &[KeyframeReach],
@@ -69,7 +70,8 @@ pub fn check(
                         r.keyframe, kf.reference
                     ),
                 )
-                .at(r.keyframe),
+                .at(r.keyframe)
+                .at_time(r.t),
             );
             continue;
         };
@@ -90,7 +92,7 @@ pub fn check(
                     distance * 1e3,
                     kf.reference
                 ),
-            ).at(r.keyframe));
+            ).at(r.keyframe).at_time(r.t));
         }
         checks.push(KeyframeCheck {
             keyframe: r.keyframe,

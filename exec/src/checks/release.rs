@@ -5,12 +5,14 @@
 use crate::report::{Cause, Failure, ReleaseCheck};
 use crate::simulate::observations::ReleaseEvent;
 
-/// One check per release; a failure for each object still in the hand at the end and each
-/// that fell further than `drop_limit` (metres).
+/// One check per release; a failure for each object still in the hand at the end (`end`, the
+/// simulated seconds of the run) and each that fell further than `drop_limit` (metres), at its
+/// release.
 pub fn check(
     releases: &[ReleaseEvent],
     still_held: &[String],
     drop_limit: f64,
+    end: f64,
 ) -> (Vec<ReleaseCheck>, Vec<Failure>) {
     let mut failures: Vec<Failure> = still_held
         .iter()
@@ -19,6 +21,7 @@ pub fn check(
                 Cause::GoalNotMet,
                 format!("{o} is still in the hand at the end: the spec never releases it"),
             )
+            .at_time(end)
         })
         .collect();
     let checks = releases
@@ -39,7 +42,8 @@ pub fn check(
                             drop_limit * 1e2
                         ),
                     )
-                    .at(r.keyframe),
+                    .at(r.keyframe)
+                    .at_time(r.t),
                 );
             }
             ReleaseCheck {
@@ -69,17 +73,19 @@ mod tests {
 
     #[test]
     fn a_fall_beyond_the_limit_is_a_drop_and_a_kept_object_is_no_release() {
-        let (checks, failures) = check(&[release(0.1405, 0.14)], &[], 0.02);
+        let (checks, failures) = check(&[release(0.1405, 0.14)], &[], 0.02, 9.0);
         assert!(failures.is_empty() && (checks[0].fall - 0.0005).abs() < 1e-9);
-        let (_, failures) = check(&[release(0.21, 0.14)], &[], 0.02);
+        let (_, failures) = check(&[release(0.21, 0.14)], &[], 0.02, 9.0);
         assert_eq!(failures[0].cause, Cause::Dropped);
+        assert_eq!(failures[0].t, Some(2.0), "at the release");
         assert!(
             failures[0].detail.contains("fell 7.0 cm"),
             "{}",
             failures[0].detail
         );
-        let (_, failures) = check(&[], &["part".into()], 0.02);
+        let (_, failures) = check(&[], &["part".into()], 0.02, 9.0);
         assert_eq!(failures[0].cause, Cause::GoalNotMet);
+        assert_eq!(failures[0].t, Some(9.0), "at the end");
         assert!(failures[0].detail.contains("never releases"));
     }
 }

@@ -1,6 +1,7 @@
 //! The gripper's actions during a run: closing when the plan closes (until both pads touch),
-//! judging and welding what the pads closed on, carrying it while the weld holds, letting go
-//! when the plan opens, and remembering where released objects were let go.
+//! judging and welding what the pads closed on, carrying it while the weld holds (and noting
+//! when it first slipped beyond the slip limit), letting go when the plan opens, and
+//! remembering where released objects were let go.
 
 use super::observations::{GraspEvent, Observations, ReleaseEvent};
 use crate::arm::{FingerCommand, SimArm};
@@ -50,16 +51,19 @@ pub(super) struct Gripper {
     limits: GraspLimits,
     grasp_force: f64,
     open_width: f64,
+    slip_limit: f64,
 }
 
 impl Gripper {
-    /// The gripper commands of `plan`, closing on the objects `spec` names.
+    /// The gripper commands of `plan`, closing on the objects `spec` names; a held object
+    /// moving more than `slip_limit` (metres) in the hand is noted as slipped.
     pub(super) fn new(
         plan: &Plan,
         spec: &TaskSpec,
         limits: GraspLimits,
         grasp_force: f64,
         open_width: f64,
+        slip_limit: f64,
     ) -> Gripper {
         let mut commands: Vec<(f64, Command)> = plan
             .events
@@ -94,6 +98,7 @@ impl Gripper {
             limits,
             grasp_force,
             open_width,
+            slip_limit,
         }
     }
 
@@ -189,8 +194,10 @@ impl Gripper {
             }
             let now = tcp.inverse() * sim.object_pose(h.object);
             let slip = (now.translation.vector - h.in_tcp.translation.vector).norm();
-
             event.slip = event.slip.max(slip);
+            if slip > self.slip_limit && event.slipped_at.is_none() {
+                event.slipped_at = Some(t);
+            }
         }
     }
 
@@ -216,6 +223,7 @@ impl Gripper {
             squared: 0.0,
             broke_at: None,
             slip: 0.0,
+            slipped_at: None,
             peak_load: 0.0,
         };
         let object = match pads {

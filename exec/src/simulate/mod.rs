@@ -84,6 +84,7 @@ pub fn simulate(
         options.grasp,
         options.drives.grasp_force,
         robot.open_width(),
+        options.slip_limit,
     );
     let roles = ContactRoles::new(robot, world);
     let labels: Vec<String> = plan
@@ -204,7 +205,7 @@ pub fn simulate(
                         points: Vec::new(),
                     })
                     .points
-                    .push(tcp.translation.vector);
+                    .push((t_next, tcp.translation.vector));
             }
         }
     }

@@ -28,8 +28,8 @@ pub struct LinePath {
     pub start: f64,
     /// End.
     pub end: f64,
-    /// TCP positions, one per step, from the start to the end.
-    pub points: Vec<Vector3<f64>>,
+    /// Simulated time and TCP position, one per step, from the start to the end.
+    pub points: Vec<(f64, Vector3<f64>)>,
 }
 
 /// What happened when the gripper closed at a keyframe.
@@ -55,6 +55,8 @@ pub struct GraspEvent {
     pub broke_at: Option<f64>,
     /// Largest displacement of the object in the hand until it was released (metres).
     pub slip: f64,
+    /// When that displacement first exceeded the slip limit, if it did.
+    pub slipped_at: Option<f64>,
     /// Largest force along the pads' faces the grasp carried (N).
     pub peak_load: f64,
 }
