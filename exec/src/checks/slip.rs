@@ -47,6 +47,7 @@ mod tests {
             measure: None,
             unsound: None,
             welded: true,
+            squared: 0.0,
             broke_at,
             slip,
             slipped_at,
