@@ -59,6 +59,17 @@ fn every_ground_truth_passes_randomized_trials() {
             (r["trials"].as_u64(), r["passed"].as_u64()),
             (Some(3), Some(3))
         );
+        // The pass rate with its exact 95 % interval: 0.025^(1/3) to 1.
+        let rate = &r["pass_rate"];
+        assert_eq!(
+            (rate["passed"].as_u64(), rate["trials"].as_u64()),
+            (Some(3), Some(3))
+        );
+        assert!((rate["lower"].as_f64().unwrap() - 0.025f64.powf(1.0 / 3.0)).abs() < 1e-9);
+        assert_eq!(
+            (rate["upper"].as_f64(), rate["confidence"].as_f64()),
+            (Some(1.0), Some(0.95))
+        );
         assert_eq!(r["randomized"], true);
         let seeds: Vec<u64> = r["reports"]
             .as_array()
@@ -124,7 +135,7 @@ fn the_table_counts_failures_by_cause_and_a_failed_trial_exits_1() {
     let out = text(&o.stdout);
     for (label, value) in [
         ("trials", "2"),
-        ("passed", "0"),
+        ("passed", "0/2 (0.0 %, 95 % CI 0.0 %–84.2 %)"),
         ("failed: unreachable", "2"),
         ("failed: no collision-free goal", "0"),
         ("failed: collision", "0"),
@@ -385,7 +396,10 @@ fn demo_teaches_learns_executes_and_writes_four_files() {
     ] {
         assert!(out.contains(stage), "no `{stage}` in\n{out}");
     }
-    assert!(has_row(&out, "passed", "2"), "{out}");
+    assert!(
+        has_row(&out, "passed", "2/2 (100.0 %, 95 % CI 15.8 %–100.0 %)"),
+        "{out}"
+    );
     let folder = dir.join("akl-out");
     for file in ["demo.mcap", "spec.json", "report.json", "trace.mcap"] {
         assert!(out.contains(&format!("akl-out/{file}")), "{file} not named");

@@ -3,6 +3,7 @@
 
 use crate::contacts::{Collision, ContactLimits, Extreme};
 use akl_scene::GoalCheck;
+use akl_stats::PassRate;
 use akl_tsr::PoseJson;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -393,6 +394,8 @@ pub struct BatchReport {
     pub trials: usize,
     /// Number that passed.
     pub passed: usize,
+    /// The pass rate with its 95 % confidence interval (exact, Clopper–Pearson).
+    pub pass_rate: PassRate,
     /// Whether the batch was stopped (Ctrl-C) before every trial asked for had started: the
     /// report covers only the trials that finished.
     pub interrupted: bool,
@@ -433,6 +436,7 @@ impl BatchReport {
         wall_seconds: f64,
         settings: Settings,
     ) -> BatchReport {
+        let passed = reports.iter().filter(|r| r.passed).count();
         let mut failures: BTreeMap<Cause, usize> = BTreeMap::new();
         let mut secondary: BTreeMap<Cause, usize> = BTreeMap::new();
         for r in &reports {
@@ -453,7 +457,8 @@ impl BatchReport {
             seed,
             randomized,
             trials: reports.len(),
-            passed: reports.iter().filter(|r| r.passed).count(),
+            passed,
+            pass_rate: PassRate::new(passed, reports.len()),
             interrupted: false,
             failures,
             secondary,

@@ -259,7 +259,7 @@ pub(crate) fn print_executed(x: &Executed) {
     let trials = r.trials.to_string();
     let mut table = Table::new(["trials", &trials]);
     let mut row = |a: &str, b: String| table.row(vec![a.to_string(), b]);
-    row("passed", r.passed.to_string());
+    row("passed", r.pass_rate.to_string());
     for cause in Cause::ALL {
         let n = r.failures.get(&cause).copied().unwrap_or(0);
         row(&format!("failed: {cause}"), n.to_string());
