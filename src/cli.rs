@@ -96,44 +96,63 @@ pub enum Command {
     /// Exit codes: 0 measured; 2 bad input (a missing or invalid spec file, an unknown task, a
     /// spec naming objects the task does not have); 1 a randomized scene cannot be made.
     Flexibility(FlexibilityArgs),
-    /// Gate a deployment: the spec must pass its randomized trials and be least restrictive.
+    /// Gate a deployment: the spec must succeed with probability at least P (at confidence C)
+    /// and be least restrictive.
     ///
-    /// The spec runs N randomized trials (as `akl execute --randomize N`, but with every
-    /// keyframe's goal drawn at random within its TSR, so the whole region is tried, not its
-    /// centre). Then it runs on the same seeds without each keyframe, and without each
-    /// move_in_line: a removal that still passes every trial is not essential, and a spec
-    /// with it is not the least restrictive one (thesis Theorem 3.2.3). With --demo (the
-    /// recording the spec was learned from) each of the teacher's answers is flipped, the
-    /// demonstration learned again with AKL and the result executed: a "no" is contradicted
-    /// when the spec fails and restoring the line makes it pass; a "yes" (or "I don't know")
-    /// when dropping the line still passes.
+    /// The spec's randomized trials (as `akl execute --randomize`, but with every keyframe's
+    /// goal drawn at random within its TSR, so the whole region is tried, not its centre) are
+    /// judged one by one in seed order by a sequential test, run in batches on every core until
+    /// it decides: it passes once the exact one-sided upper confidence bound (Clopper-Pearson,
+    /// at --confidence) of the failure rate is at most 1 - P (--min-success), fails once the
+    /// lower bound exceeds it, and is undecided after --max-trials. With the defaults (P 0.99,
+    /// C 0.95, 2,000 trials) a spec that never fails passes at trial 299, a spec failing 0.1 %
+    /// of trials passes 99.45 % of the time, one failing 2 % fails 98.9 % of the time, one
+    /// failing every trial fails at trial 1; the verdict never depends on --jobs.
     ///
-    /// Exit codes: 0 the spec passes every trial and nothing in it is superfluous; 1 a trial
-    /// failed, a removal passed, or an answer is contradicted; 2 bad input (a missing or
-    /// invalid spec or demo, an unknown task, a spec naming objects the task does not have, a
-    /// bad option).
+    /// A spec that passes is then judged without each keyframe and each move_in_line by the
+    /// same gate on the same seeds: a removal that passes it is not essential (the spec is not
+    /// the least restrictive one, thesis Theorem 3.2.3), one that fails it is essential, else
+    /// undecided. With --demo (the recording the spec was learned from) each of the teacher's
+    /// answers is flipped, the demonstration learned again with AKL and the result gated: a
+    /// "no" is contradicted when the spec fails and restoring the line passes; a "yes" (or "I
+    /// don't know") when dropping the line passes. Every failed trial of the spec is listed with
+    /// the `akl execute` command that replays it (--goals sampled draws the same goals).
+    ///
+    /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: what was judged is printed and the
+    /// report written with "interrupted": true; a second signal exits at once.
+    ///
+    /// Exit codes: 0 passes (and minimal); 1 fails (or an output cannot be written); 2 bad
+    /// input (a missing or invalid spec or demo, an unknown task, a spec naming objects the task
+    /// does not have, a bad option); 3 undecided; 4 not minimal (passes, but a removal passes
+    /// too or an answer is contradicted); 130 interrupted by SIGINT or SIGTERM.
     Validate(ValidateArgs),
-    /// Widen every keyframe's TSR as far as the randomized trials allow, and write the result.
+    /// Widen every keyframe's TSR as far as the deployment gate allows, and write the result.
     ///
-    /// For each keyframe and each of x, y, z, roll, pitch and yaw, the upper and then the lower
-    /// bound is pushed away from the nominal pose, first to its limit (10 cm, pi/2 for roll and
-    /// pitch, pi for yaw), then by bisection between the last bound that passed and the first
-    /// that failed (--depth steps). Each probe runs --trials randomized trials with goals drawn
-    /// within the part of the region it adds. The relaxed spec is then re-verified in --verify
-    /// trials on seeds the search never used (from SEED + 1,000,000); if a trial fails, the
-    /// widening is halved and verified again on new seeds, four times at most. Prints every bound
-    /// that moved and the bits of freedom gained (see `akl flexibility`).
+    /// The spec itself must first pass the gate (as `akl validate`). Then, keyframe by keyframe,
+    /// each of x, y, z, roll, pitch and yaw is widened symmetrically to the widest of its whole
+    /// limit (10 cm, pi/2 for roll and pitch, pi for yaw), a quarter or a sixteenth of it that
+    /// passes a screening: up to --screen trials, dropped at the first trial it fails that the
+    /// spec before it passes on the same seed (the spec's own rare failures are not blamed on
+    /// the widening). What a keyframe kept is then gated on fresh seeds (from SEED + 1,000,000);
+    /// if the gate does not pass it, the keyframe's widening is halved and gated again, twice
+    /// at most, then dropped. Every probe and gate is printed as it ends. The gain is given as
+    /// TSR log-volume (one bit per doubled width, rotation included) beside the bits of
+    /// execution traces (see `akl flexibility`).
     ///
-    /// Exit codes: 0 the relaxed spec passed its verification and was written (atomically);
-    /// 1 the spec fails its own trials or no relaxation passed its verification (nothing is
-    /// written); 2 bad input.
+    /// Ctrl-C (SIGINT) or SIGTERM stops: the widest spec that passed a gate so far is written,
+    /// marked interrupted; a second signal exits at once.
+    ///
+    /// Exit codes: 0 a relaxed spec passed its gate and was written (atomically); 1 the spec
+    /// fails its own gate or no widening passed one (nothing is written); 2 bad input; 130
+    /// interrupted by SIGINT or SIGTERM (the best gated spec, if any, written).
     Relax(RelaxArgs),
     /// Compare specs of one task: keyframes, lines, bits of freedom, planning, execution and
     /// the validation verdict, one row per spec.
     ///
     /// Bits of freedom as `akl flexibility`; plan success and best duration from the budgeted
     /// planner over --scenes randomized scenes (as `akl flexibility`); the pass rate and the
-    /// verdict from `akl validate` with --randomize trials.
+    /// verdict from `akl validate`'s gate (--min-success, --confidence, --max-trials); the pass
+    /// rate is given with its exact 95 % interval.
     ///
     /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: the specs compared so far are printed
     /// (the one under way with the trials it finished and no verdict) and marked interrupted; a
@@ -318,6 +337,20 @@ pub struct TrialArgs {
     pub pose_noise: PoseNoiseArg,
 }
 
+/// What the deployment gate asks (shared by `akl validate`, `relax` and `compare`).
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct GateArgs {
+    /// The success probability the spec must be shown to reach.
+    #[arg(long, value_name = "P", default_value_t = 0.99)]
+    pub min_success: f64,
+    /// The confidence each look of the sequential test shows it at.
+    #[arg(long, value_name = "C", default_value_t = 0.95)]
+    pub confidence: f64,
+    /// Trials after which the gate stops undecided.
+    #[arg(long, value_name = "N", default_value_t = 2000, alias = "randomize")]
+    pub max_trials: usize,
+}
+
 /// `akl validate SPEC --task T ...`
 #[derive(Debug, clap::Args)]
 pub struct ValidateArgs {
@@ -326,12 +359,22 @@ pub struct ValidateArgs {
     /// Task (built-in name or task file) whose world the spec runs in.
     #[arg(long)]
     pub task: String,
-    /// Randomized trials of the spec and of each removal.
-    #[arg(long, value_name = "N", default_value_t = 20)]
-    pub randomize: usize,
+    #[command(flatten)]
+    pub gate: GateArgs,
     /// Seed of the first trial (trial i uses SEED + i).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Write the spec's trials (those the gate read, every check) as JSON to this file, in
+    /// the format of `akl execute --report`.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Write trial N of the spec's trials (default: the first that failed, else the first) as
+    /// an MCAP trace, as `akl execute --trace`.
+    #[arg(long, value_name = "FILE")]
+    pub trace: Option<PathBuf>,
+    /// Which of the spec's trials --trace writes.
+    #[arg(long, value_name = "N", requires = "trace")]
+    pub trace_trial: Option<usize>,
     /// The demonstration the spec was learned from (JSONL or MCAP): check the teacher's answers.
     #[arg(long, value_name = "DEMO")]
     pub demo: Option<PathBuf>,
@@ -358,16 +401,12 @@ pub struct RelaxArgs {
     /// Where to write the relaxed spec.
     #[arg(short = 'o', long, value_name = "FILE")]
     pub output: PathBuf,
-    /// Randomized trials per probe of a bound.
-    #[arg(long, value_name = "N", default_value_t = 10)]
-    pub trials: usize,
-    /// Bisection steps per bound once its limit has failed.
-    #[arg(long, value_name = "D", default_value_t = 4)]
-    pub depth: usize,
-    /// Trials the relaxed spec must pass on fresh seeds before it is written.
-    #[arg(long, value_name = "N", default_value_t = 30)]
-    pub verify: usize,
-    /// Seed of the search's first trial; verification uses seeds from SEED + 1,000,000.
+    /// Most screening trials of one widening.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    pub screen: usize,
+    #[command(flatten)]
+    pub gate: GateArgs,
+    /// Seed of the search's first trial; the gates use seeds from SEED + 1,000,000.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     #[command(flatten)]
@@ -388,9 +427,8 @@ pub struct CompareArgs {
     /// Task (built-in name or task file) whose world the specs run in.
     #[arg(long)]
     pub task: String,
-    /// Randomized validation trials per spec (and per removal).
-    #[arg(long, value_name = "N", default_value_t = 10)]
-    pub randomize: usize,
+    #[command(flatten)]
+    pub gate: GateArgs,
     /// Randomized scenes the budgeted planner plans each spec in.
     #[arg(long, value_name = "N", default_value_t = 10)]
     pub scenes: usize,
@@ -435,12 +473,19 @@ pub struct ExecuteArgs {
     /// candidate, the nominal-first plan.
     #[arg(long, value_name = "MS", default_value_t = 0)]
     pub budget: u64,
+    /// Where the planner aims within each keyframe's TSR: `nominal` (its centre when
+    /// reachable) or `sampled` (drawn at random across the region, up to 8 whole-spec draws,
+    /// as `akl validate` plans: replays a validation trial; overrides --budget).
+    #[arg(long, value_enum, default_value_t = Goals::Nominal)]
+    pub goals: Goals,
     /// Instead of executing the spec, re-ground each keyframe on every other object (and the
-    /// world), its offset recomputed so its nominal pose is unchanged, and execute each such
-    /// spec in randomized trials (--randomize N per alternative, default 20): prints, per
-    /// keyframe, which references the task's randomization tells apart from the spec's (at
-    /// least 90 % of trials fail), which are equivalent (held in a fixed relation by the task
-    /// or by an earlier placement) and which it cannot tell apart.
+    /// world), its offset recomputed so its nominal pose is unchanged, and judge each such
+    /// spec by the deployment gate of `akl validate` (goals drawn across the TSRs; its default
+    /// P 0.99 and C 0.95, --randomize N its most trials, default 2,000): prints, per keyframe,
+    /// which references the task's randomization tells apart from the spec's (the gate fails
+    /// the re-grounded spec: validation would reject it), which it cannot (the gate passes
+    /// it), which are undecided, and which are equivalent (held in a fixed relation by the
+    /// task or by an earlier placement), each with its failed trials and their 95 % interval.
     #[arg(long, conflicts_with_all = ["trace", "report"])]
     pub grounding_check: bool,
     /// Which trial `--trace` writes (default: the first that failed, else the first).
@@ -545,6 +590,15 @@ pub struct CalibrateArgs {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Where `akl execute` aims within the keyframes' TSRs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Goals {
+    /// At each TSR's nominal pose when reachable.
+    Nominal,
+    /// Drawn at random across each TSR, as validation plans.
+    Sampled,
 }
 
 /// Who demonstrates in `akl teach`.

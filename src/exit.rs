@@ -7,6 +7,10 @@ use std::fmt::Display;
 pub const BAD_INPUT: u8 = 2;
 /// Exit code for failures that are not the input's fault (an output that cannot be written).
 pub const INTERNAL: u8 = 1;
+/// Exit code of `akl validate` when the gate cannot decide within its trials.
+pub const UNDECIDED: u8 = 3;
+/// Exit code of `akl validate` when the spec passes the gate but is not the least restrictive.
+pub const NOT_MINIMAL: u8 = 4;
 /// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report Ctrl-C),
 /// after it reported the trials that finished.
 pub const INTERRUPTED: u8 = 130;
@@ -21,6 +25,14 @@ pub struct CliError {
 }
 
 impl CliError {
+    /// A verdict reported with its own exit code (see the constants above).
+    pub fn verdict(code: u8, message: impl Display) -> Self {
+        CliError {
+            code,
+            message: message.to_string(),
+        }
+    }
+
     /// Bad input (exit code 2).
     pub fn input(message: impl Display) -> Self {
         CliError {

@@ -49,6 +49,11 @@ impl Progress {
         self.bar.set_position(done as u64);
     }
 
+    /// Renames what the bar counts (a new stage of the same run).
+    pub fn relabel(&self, label: &str) {
+        self.bar.set_prefix(label.to_string());
+    }
+
     /// Erases the bar, leaving the line for what is printed next.
     pub fn finish(&self) {
         self.bar.finish_and_clear();

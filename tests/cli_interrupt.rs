@@ -1,6 +1,6 @@
 //! End-to-end tests of stopping a run: SIGINT (Ctrl-C) or SIGTERM during `akl execute
 //! --randomize 2000` stops starting trials, prints the summary of those that finished, writes
-//! their report marked interrupted, and exits 130.
+//! their report marked interrupted, and exits 130; `akl validate` and `akl relax` the same.
 
 use std::io::Read;
 use std::path::Path;
@@ -128,11 +128,99 @@ fn sigterm_keeps_the_finished_trials_and_exits_130() {
 
 #[test]
 fn help_documents_exit_code_130() {
-    for command in ["execute", "compare", "eval"] {
+    for command in ["execute", "compare", "eval", "validate", "relax"] {
         let help = stdout(&akl(&[command, "--help"]));
         assert!(
             help.contains("130 interrupted by SIGINT or SIGTERM"),
             "{command}: {help}"
         );
     }
+}
+
+/// Starts `akl args` in `dir`, sends SIGINT after `after`, and returns what it printed and how
+/// it exited.
+fn interrupted_after(dir: &Path, args: &[&str], after: Duration) -> std::process::Output {
+    let child = Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the akl binary runs");
+    std::thread::sleep(after);
+    // SAFETY: sending a signal to the child this test started and has not yet waited for.
+    assert_eq!(
+        unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) },
+        0
+    );
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn ctrl_c_stops_a_validation_with_the_trials_judged_so_far() {
+    let dir = scratch("interrupt-validate");
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/pick_place.truth.json");
+    let output = interrupted_after(
+        &dir,
+        &[
+            "validate",
+            spec.to_str().unwrap(),
+            "--task",
+            "pick_place",
+            "--jobs",
+            "1",
+            "--report",
+            "r.json",
+            "--json",
+        ],
+        Duration::from_secs(4),
+    );
+    assert_eq!(output.status.code(), Some(130), "{}", stderr(&output));
+    let v = json(&output);
+    assert_eq!(v["interrupted"], true, "{v}");
+    assert_eq!(v["verdict"], serde_json::Value::Null, "{v}");
+    assert_eq!(v["spec"]["decision"], serde_json::Value::Null, "{v}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(report["interrupted"], true);
+    assert_eq!(report["gate"]["decision"], serde_json::Value::Null);
+    assert_eq!(report["trials"], v["spec"]["outcome"]["run"], "{report}");
+    let left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["r.json"], "no temporary file is left");
+}
+
+#[test]
+fn ctrl_c_stops_a_relaxation_and_writes_at_most_a_gated_spec() {
+    let dir = scratch("interrupt-relax");
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/pick_place.truth.json");
+    let output = interrupted_after(
+        &dir,
+        &[
+            "relax",
+            spec.to_str().unwrap(),
+            "--task",
+            "pick_place",
+            "--jobs",
+            "1",
+            "-o",
+            "relaxed.json",
+            "--json",
+        ],
+        Duration::from_secs(4),
+    );
+    assert_eq!(output.status.code(), Some(130), "{}", stderr(&output));
+    let v = json(&output);
+    assert_eq!(v["interrupted"], true, "{v}");
+    // Four seconds on one core are not enough to gate the spec (299 clean trials): nothing
+    // passed a gate, nothing is written.
+    assert_eq!(v["relaxed"], serde_json::Value::Null, "{v}");
+    assert!(
+        stderr(&output).contains("nothing written"),
+        "{}",
+        stderr(&output)
+    );
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
 }

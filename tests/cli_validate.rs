@@ -23,47 +23,163 @@ fn via_point_spec(dir: &Path) -> PathBuf {
     path
 }
 
+/// A lenient gate (a success probability of 0.8 shown at 0.9 confidence: 11 clean trials
+/// pass, 2 failures in the first trials fail) keeps these runs short; the default gate on the
+/// truths is measured in BENCHMARKS.md.
+const LENIENT: [&str; 6] = [
+    "--min-success",
+    "0.8",
+    "--confidence",
+    "0.9",
+    "--max-trials",
+    "100",
+];
+
+/// `args` followed by the lenient gate's options.
+fn lenient<'a>(args: &[&'a str]) -> Vec<&'a str> {
+    args.iter().copied().chain(LENIENT).collect()
+}
+
+/// The pick_place truth with block_b's placement 30 cm off the shelf, written to `dir`: it
+/// fails every trial.
+fn dropping_spec(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/pick_place.truth.json"),
+    )
+    .unwrap();
+    let mut spec: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let y = spec["keyframes"][3]["tsr"]["tw_e"]["p"][1]
+        .as_f64()
+        .unwrap();
+    spec["keyframes"][3]["tsr"]["tw_e"]["p"][1] = (y + 0.3).into();
+    let path = dir.join("dropping.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&spec).unwrap()).unwrap();
+    path
+}
+
 #[test]
 fn a_minimal_truth_passes_the_gate_and_a_via_point_is_named() {
+    let o = akl(&lenient(&[
+        "validate",
+        "tasks/pick_place.truth.json",
+        "--task",
+        "pick_place",
+    ]));
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("verdict: passes, minimal"), "{out}");
+    assert!(out.contains("spec: passes — passed 11/11"), "{out}");
+
+    let dir = scratch("validate-via");
+    let via = via_point_spec(&dir);
+    let o = akl(&lenient(&[
+        "validate",
+        via.to_str().unwrap(),
+        "--task",
+        "pick_place",
+        "--json",
+    ]));
+    assert_eq!(o.status.code(), Some(4), "not minimal: {}", stderr(&o));
+    let v = json(&o);
+    assert_eq!(v["verdict"], "not_minimal", "{v}");
+    assert_eq!(v["spec"]["decision"], "passes", "{v}");
+    assert_eq!(v["spec"]["outcome"]["passed"], 11, "{v}");
+    assert_eq!(v["spec"]["outcome"]["pass_rate"]["trials"], 11, "{v}");
+    assert_eq!(v["gate"]["min_success"], 0.8, "{v}");
+    let superfluous: Vec<&serde_json::Value> = v["removals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["essential"] == "not_essential")
+        .collect();
+    assert_eq!(superfluous.len(), 1, "{v}");
+    assert_eq!(superfluous[0]["remove"], "keyframe");
+    assert_eq!(superfluous[0]["keyframe"], 1);
+    assert_eq!(superfluous[0]["decision"], "passes");
+}
+
+#[test]
+fn the_gate_that_cannot_decide_exits_3() {
     let o = akl(&[
         "validate",
         "tasks/pick_place.truth.json",
         "--task",
         "pick_place",
-        "--randomize",
+        "--max-trials",
         "4",
     ]);
-    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "{}{}", stdout(&o), stderr(&o));
+    assert!(stdout(&o).contains("verdict: undecided"), "{}", stdout(&o));
     assert!(
-        stdout(&o).contains("verdict: passes, minimal"),
+        stderr(&o).contains("undecided within 4 trials"),
         "{}",
-        stdout(&o)
+        stderr(&o)
     );
+}
 
-    let dir = scratch("validate-via");
-    let via = via_point_spec(&dir);
-    let o = akl(&[
-        "validate",
-        via.to_str().unwrap(),
-        "--task",
-        "pick_place",
-        "--randomize",
-        "4",
-        "--json",
-    ]);
+#[test]
+fn a_failed_trial_is_replayed_by_the_printed_command() {
+    let dir = scratch("validate-replay");
+    let spec = dropping_spec(&dir);
+    let o = akl_in(
+        &dir,
+        &lenient(&[
+            "validate",
+            spec.to_str().unwrap(),
+            "--task",
+            "pick_place",
+            "--report",
+            "r.json",
+            "--trace",
+            "t.mcap",
+            "--json",
+        ]),
+    );
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let v = json(&o);
-    assert_eq!(v["verdict"], "not_minimal", "{v}");
-    assert_eq!(v["outcome"]["passed"], 4, "{v}");
-    let superfluous: Vec<&serde_json::Value> = v["removals"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|r| r["essential"] == false)
-        .collect();
-    assert_eq!(superfluous.len(), 1, "{v}");
-    assert_eq!(superfluous[0]["remove"], "keyframe");
-    assert_eq!(superfluous[0]["keyframe"], 1);
+    assert_eq!(v["verdict"], "fails", "{v}");
+    assert_eq!(v["spec"]["decision"], "fails", "{v}");
+    assert_eq!(
+        v["spec"]["outcome"]["failed_seeds"],
+        serde_json::json!([0, 1])
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(report["gate"]["decision"], "fails", "{report}");
+    assert_eq!(report["interrupted"], false);
+    assert_eq!(report["pass_rate"]["trials"], 2, "{report}");
+    assert!(dir.join("t.mcap").metadata().unwrap().len() > 0);
+    // The second failed trial, replayed by the command printed for it.
+    let replay = &v["replays"][1];
+    assert_eq!(replay["seed"], 1);
+    let command = replay["command"].as_str().unwrap();
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[0], "akl");
+    let mut args = words[1..].to_vec();
+    args.push("--json");
+    let again = akl_in(&dir, &args);
+    assert_eq!(
+        again.status.code(),
+        Some(1),
+        "{command}: {}",
+        stderr(&again)
+    );
+    let replayed = json(&again);
+    let root = |trial: &serde_json::Value| {
+        trial["failures"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["root"] == true)
+            .cloned()
+            .unwrap()
+    };
+    let original = root(&report["reports"][1]);
+    let seen = root(&replayed["reports"][0]);
+    assert_eq!(replayed["reports"][0]["seed"], 1);
+    assert_eq!(seen["cause"], original["cause"], "{command}");
+    assert_eq!(seen["detail"], original["detail"], "{command}");
+    assert!(dir.join("trial-1.mcap").exists());
 }
 
 #[test]
@@ -84,17 +200,15 @@ fn a_wrong_no_is_contradicted_by_the_simulation() {
     assert!(o.status.success(), "{}", stderr(&o));
     let o = akl_in(
         &dir,
-        &[
+        &lenient(&[
             "validate",
             "no.spec.json",
             "--task",
             "inspection",
             "--demo",
             "no.mcap",
-            "--randomize",
-            "4",
             "--json",
-        ],
+        ]),
     );
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let v = json(&o);
@@ -105,37 +219,65 @@ fn a_wrong_no_is_contradicted_by_the_simulation() {
     assert_eq!(checks.len(), 1, "{answers}");
     assert_eq!(checks[0]["answer"], "no");
     assert_eq!(checks[0]["verdict"], "contradicted", "{answers}");
+    assert_eq!(checks[0]["decision"], "passes", "{answers}");
     assert_eq!(checks[0]["lines_when_flipped"], 1);
 }
 
 #[test]
-fn relax_writes_a_verified_wider_spec() {
+fn relax_writes_a_gated_wider_spec() {
     let dir = scratch("relax");
     let out = dir.join("relaxed.json");
-    let o = akl(&[
+    let o = akl(&lenient(&[
         "relax",
         "tasks/pick_place.truth.json",
         "--task",
         "pick_place",
-        "--trials",
-        "3",
-        "--depth",
-        "1",
-        "--verify",
-        "8",
+        "--screen",
+        "4",
         "-o",
         out.to_str().unwrap(),
         "--json",
-    ]);
+    ]));
     assert!(o.status.success(), "{}", stderr(&o));
     let v = json(&o);
-    assert!(v["bits_after"].as_f64().unwrap() > v["bits_before"].as_f64().unwrap());
-    let last = v["verifications"].as_array().unwrap().last().unwrap();
-    assert_eq!(last["outcome"]["passed"], 8, "{last}");
+    let gates = v["gates"].as_array().unwrap();
+    assert_eq!(
+        gates[0]["keyframe"],
+        serde_json::Value::Null,
+        "the spec first"
+    );
+    assert!(
+        gates.iter().skip(1).any(|g| g["decision"] == "passes"),
+        "{v}"
+    );
+    let gained: f64 = v["volume_gain"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g.as_f64().unwrap())
+        .sum();
+    assert!(gained > 0.0, "{v}");
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(written["method"], "truth+relaxed");
     assert_eq!(written, v["relaxed"]);
+
+    // Each probe and gate is printed as it ends.
+    let o = akl(&lenient(&[
+        "relax",
+        "tasks/pick_place.truth.json",
+        "--task",
+        "pick_place",
+        "--screen",
+        "4",
+        "-o",
+        dir.join("again.json").to_str().unwrap(),
+    ]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("gate on the spec as given"), "{text}");
+    assert!(text.contains("keyframe 0 x"), "{text}");
+    assert!(text.contains("TSR volume gained"), "{text}");
 
     // A bad count exits 2 and writes nothing.
     let o = akl(&[
@@ -143,13 +285,13 @@ fn relax_writes_a_verified_wider_spec() {
         "tasks/pick_place.truth.json",
         "--task",
         "pick_place",
-        "--verify",
+        "--screen",
         "0",
         "-o",
         dir.join("other.json").to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--verify"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--screen"), "{}", stderr(&o));
     assert!(!dir.join("other.json").exists());
 }
 
@@ -157,20 +299,18 @@ fn relax_writes_a_verified_wider_spec() {
 fn compare_prints_a_row_per_spec() {
     let dir = scratch("compare");
     let via = via_point_spec(&dir);
-    let o = akl(&[
+    let o = akl(&lenient(&[
         "compare",
         "tasks/pick_place.truth.json",
         via.to_str().unwrap(),
         "--task",
         "pick_place",
-        "--randomize",
-        "3",
         "--scenes",
         "2",
         "--budget",
         "0",
         "--json",
-    ]);
+    ]));
     assert!(o.status.success(), "{}", stderr(&o));
     let v = json(&o);
     let rows = v["rows"].as_array().unwrap();
@@ -181,24 +321,25 @@ fn compare_prints_a_row_per_spec() {
     assert_eq!(rows[0]["verdict"], "passes");
     assert_eq!(rows[1]["verdict"], "not_minimal");
     assert_eq!(rows[0]["plan_success"], 1.0);
+    assert_eq!(rows[0]["pass_rate"]["passed"], 11, "{v}");
+    assert!(rows[0]["pass_rate"]["lower"].as_f64().unwrap() > 0.7, "{v}");
 
-    let o = akl(&[
+    let o = akl(&lenient(&[
         "compare",
         "tasks/pick_place.truth.json",
         via.to_str().unwrap(),
         "--task",
         "pick_place",
-        "--randomize",
-        "2",
         "--scenes",
         "1",
-    ]);
+    ]));
     assert!(o.status.success(), "{}", stderr(&o));
     let table = stdout(&o);
     assert!(
         table.contains("bits") && table.contains("validation"),
         "{table}"
     );
+    assert!(table.contains("11/11 ("), "{table}");
     assert!(table.contains("not essential: keyframe 1"), "{table}");
 }
 
@@ -217,15 +358,21 @@ fn bad_input_exits_2_naming_what_is_wrong() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("assembly.truth.json"), "{}", stderr(&o));
 
-    let o = akl(&[
-        "validate",
-        "tasks/pick_place.truth.json",
-        "--task",
-        "pick_place",
-        "--randomize",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
+    for (option, value) in [
+        ("--max-trials", "0"),
+        ("--min-success", "1"),
+        ("--confidence", "0"),
+    ] {
+        let o = akl(&[
+            "validate",
+            "tasks/pick_place.truth.json",
+            "--task",
+            "pick_place",
+            option,
+            value,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{option} {value}");
+    }
 
     let o = akl(&[
         "compare",
@@ -283,8 +430,10 @@ fn validate_answers(dir: &Path, answers: &str) -> (serde_json::Value, Option<i32
             "pick_place",
             "--demo",
             "demo.mcap",
-            "--randomize",
-            "4",
+            "--min-success",
+            "0.8",
+            "--confidence",
+            "0.9",
             "--json",
         ],
     );
@@ -292,11 +441,11 @@ fn validate_answers(dir: &Path, answers: &str) -> (serde_json::Value, Option<i32
 }
 
 #[test]
-fn a_wrong_yes_is_contradicted_and_a_failing_spec_confirms_nothing() {
+fn a_wrong_yes_is_contradicted_and_a_failing_spec_confirms_no_no() {
     let dir = scratch("validate-yes");
     // The straight-moving teacher makes five unintended lines; a "yes" to the fourth alone.
     let (v, code) = validate_answers(&dir, "no,no,no,yes,no");
-    assert_eq!(code, Some(1));
+    assert_eq!(code, Some(4), "not minimal");
     assert_eq!(v["verdict"], "not_minimal", "{v}");
     let checks = v["answers"]["checks"].as_array().unwrap();
     let verdicts: Vec<&str> = checks
@@ -315,12 +464,16 @@ fn a_wrong_yes_is_contradicted_and_a_failing_spec_confirms_nothing() {
         "{v}"
     );
 
-    // A "yes" to the first, a line into the first grasp: the spec passes no trial, so no
-    // trial can confirm any answer.
+    // A "yes" to the first, a line into the first grasp: the spec fails the gate. Dropping
+    // that line passes it (the "yes" is contradicted); a "no" whose flip fails as well says
+    // nothing about that line, so none is confirmed.
     let (v, code) = validate_answers(&dir, "yes,no,no,no,no");
     assert_eq!(code, Some(1));
-    assert_eq!(v["outcome"]["passed"], 0, "{v}");
-    for c in v["answers"]["checks"].as_array().unwrap() {
+    assert_eq!(v["verdict"], "fails", "{v}");
+    assert_eq!(v["spec"]["outcome"]["passed"], 0, "{v}");
+    let checks = v["answers"]["checks"].as_array().unwrap();
+    assert_eq!(checks[0]["verdict"], "contradicted", "{v}");
+    for c in &checks[1..] {
         assert_ne!(c["verdict"], "confirmed", "{c}");
     }
 }

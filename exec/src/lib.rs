@@ -8,7 +8,6 @@ pub mod contacts;
 pub mod convert;
 pub mod error;
 pub mod grasp;
-pub mod grounding;
 pub mod interrupt;
 pub mod perception;
 pub mod report;

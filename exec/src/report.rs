@@ -3,7 +3,7 @@
 
 use crate::contacts::{Collision, ContactLimits, Extreme};
 use akl_scene::GoalCheck;
-use akl_stats::PassRate;
+use akl_stats::{GateVerdict, PassRate};
 use akl_tsr::PoseJson;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -396,6 +396,9 @@ pub struct BatchReport {
     pub passed: usize,
     /// The pass rate with its 95 % confidence interval (exact, Clopper–Pearson).
     pub pass_rate: PassRate,
+    /// The deployment gate that judged these trials, when a gate did (`akl validate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gate: Option<GateVerdict>,
     /// Whether the batch was stopped (Ctrl-C) before every trial asked for had started: the
     /// report covers only the trials that finished.
     pub interrupted: bool,
@@ -459,6 +462,7 @@ impl BatchReport {
             trials: reports.len(),
             passed,
             pass_rate: PassRate::new(passed, reports.len()),
+            gate: None,
             interrupted: false,
             failures,
             secondary,

@@ -1,14 +1,16 @@
 //! `akl compare SPEC... --task T`: one row per spec.
 
+use super::execute::jobs;
 use super::robot::load as load_robot;
-use super::validate::{cli_error, exec_options, trials};
+use super::validate::{cli_error, exec_options, gate_options};
 use super::{load_spec_for, print_json};
 use crate::cli::CompareArgs;
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
-use akl_exec::trial::ExecOptions;
 use akl_scene::builtin;
+use akl_stats::interval::percent;
+use akl_stats::GateOptions;
 use akl_validate::compare::{compare, CompareOptions, Row};
 use akl_validate::ValidateOptions;
 use serde::Serialize;
@@ -16,7 +18,7 @@ use serde::Serialize;
 #[derive(Serialize)]
 struct Compared {
     task: String,
-    trials: usize,
+    gate: GateOptions,
     scenes: usize,
     budget_ms: u64,
     seed: u64,
@@ -34,21 +36,17 @@ pub fn run(args: CompareArgs) -> CliResult {
         .collect::<Result<Vec<_>, CliError>>()?;
     let options = CompareOptions {
         validate: ValidateOptions {
-            trials: trials(args.randomize, args.seed, &args.trials)?,
-            exec: ExecOptions {
-                interrupt: crate::stop::interrupt(),
-                ..exec_options(&args.trials)
-            },
+            seed: args.seed,
+            jobs: jobs(args.trials.jobs)?,
+            gate: gate_options(&args.gate)?,
+            exec: exec_options(&args.trials),
         },
         scenes: args.scenes,
         budget_ms: args.budget,
     };
-    let progress = Progress::new(
-        &format!("comparing on `{}`", task.name),
-        specs.len() * args.randomize,
-    );
+    let progress = Progress::new(&format!("comparing on `{}`", task.name), specs.len());
     let rows = compare(&robot, &task, &specs, &options, &|done, _| {
-        progress.set(done * args.randomize)
+        progress.set(done)
     });
     progress.finish();
     // Every spec was loaded and checked against the task above, so an error here is the
@@ -56,7 +54,7 @@ pub fn run(args: CompareArgs) -> CliResult {
     let comparison = rows.map_err(|e| cli_error(e, &args.specs[0], &task))?;
     let compared = Compared {
         task: task.name.clone(),
-        trials: args.randomize,
+        gate: options.validate.gate,
         scenes: args.scenes,
         budget_ms: args.budget,
         seed: args.seed,
@@ -80,8 +78,8 @@ pub fn run(args: CompareArgs) -> CliResult {
 
 fn print_compared(c: &Compared) {
     println!(
-        "task `{}`: bits of freedom on the 5 cm lattice; planning over {} randomized scenes (budget {} ms); {} validation trials per spec (seeds {}..)",
-        c.task, c.scenes, c.budget_ms, c.trials, c.seed
+        "task `{}`: bits of freedom on the 5 cm lattice; planning over {} randomized scenes (budget {} ms); validation by the gate (success {} at {:.0} % confidence, at most {} trials from seed {}); pass rates with their 95 % interval",
+        c.task, c.scenes, c.budget_ms, c.gate.min_success, 100.0 * c.gate.confidence, c.gate.max_trials, c.seed
     );
     if c.interrupted {
         println!("interrupted: only the specs compared are listed");
@@ -115,7 +113,13 @@ fn print_compared(c: &Compared) {
             r.bits.map_or("no trace".into(), |b| format!("{b:.1}")),
             format!("{:.0} %", r.plan_success * 100.0),
             r.best_duration.map_or("-".into(), |d| format!("{d:.2} s")),
-            format!("{:.0} %", r.pass_rate * 100.0),
+            format!(
+                "{}/{} ({}–{})",
+                r.pass_rate.passed,
+                r.pass_rate.trials,
+                percent(r.pass_rate.lower),
+                percent(r.pass_rate.upper)
+            ),
             verdict,
         ]);
     }

@@ -2,20 +2,22 @@
 
 use super::robot::load as load_robot;
 use super::{check_output, print_json};
-use crate::cli::{ExecuteArgs, PoseNoiseArg};
+use crate::cli::{ExecuteArgs, Goals, PoseNoiseArg};
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::error::ExecError;
-use akl_exec::grounding::GroundingOptions;
 use akl_exec::perception::PoseNoise;
 use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
 use akl_planner::search::PlanBudget;
 use akl_planner::{PlanOptions, Robot};
 use akl_scene::{builtin, Task};
+use akl_stats::GateOptions;
 use akl_tsr::{FileError, TaskSpec};
+use akl_validate::grounding::GroundingOptions;
+use akl_validate::trials::verifying;
 use serde::Serialize;
 use std::path::Path;
 
@@ -77,16 +79,25 @@ pub fn run(args: ExecuteArgs) -> CliResult {
         interrupt: crate::stop::interrupt(),
         ..ExecOptions::default()
     };
+    let options = match args.goals {
+        Goals::Nominal => options,
+        Goals::Sampled => verifying(&options),
+    };
     if args.grounding_check {
+        let defaults = GroundingOptions::default();
         let grounding = GroundingOptions {
-            trials: match args.randomize {
-                Some(0) => return Err(CliError::input("--randomize: needs at least one trial")),
-                Some(n) => n,
-                None => GroundingOptions::default().trials,
+            gate: GateOptions {
+                max_trials: match args.randomize {
+                    Some(0) => {
+                        return Err(CliError::input("--randomize: needs at least one trial"))
+                    }
+                    Some(n) => n,
+                    None => defaults.gate.max_trials,
+                },
+                ..defaults.gate
             },
             seed: args.seed,
             jobs: jobs(args.jobs)?,
-            ..GroundingOptions::default()
         };
         return super::grounding::run(
             &robot, &task, &spec, &args.spec, &options, &grounding, args.json,

@@ -6,15 +6,16 @@ use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::error::ExecError;
-use akl_exec::grounding::{check_groundings, GroundingOptions, Groundings, Verdict};
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::interval::percent;
 use akl_tsr::{FileError, TaskSpec};
+use akl_validate::grounding::{check_groundings, GroundingOptions, Groundings, Verdict};
 use std::path::Path;
 
-/// Runs the check with `trials` randomized trials per alternative and prints it; interrupted
-/// (`exec.interrupt`), it prints what it measured and exits 130.
+/// Runs the check, each alternative judged by the gate of `options`, and prints it;
+/// interrupted (`exec.interrupt`), it prints what it measured and exits 130.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     robot: &Robot,
@@ -26,13 +27,9 @@ pub fn run(
     json: bool,
 ) -> CliResult {
     let alternatives = spec.keyframes.len() * task.world.objects.len();
-    let progress = Progress::new(
-        &format!("re-grounding on `{}`", task.name),
-        alternatives * options.trials,
-    );
-    let measured = check_groundings(robot, task, spec, exec, options, &|done, total| {
-        let _ = total;
-        progress.set(done * options.trials);
+    let progress = Progress::new(&format!("re-grounding on `{}`", task.name), alternatives);
+    let measured = check_groundings(robot, task, spec, exec, options, &|done, _| {
+        progress.set(done);
     });
     progress.finish();
     let measured = measured.map_err(|e| match e {
@@ -66,18 +63,21 @@ fn print_groundings(
     options: &GroundingOptions,
     measured: &Groundings,
 ) {
+    let g = &options.gate;
     println!(
-        "{}: each keyframe re-grounded on every other object of `{}`, {} randomized trials each \
-         (seeds {}..); distinguished when at least {:.0} % fail",
+        "{}: each keyframe re-grounded on every other object of `{}`, judged by the deployment \
+         gate (success {} at confidence {}, at most {} trials from seed {}, goals drawn across \
+         the TSRs); distinguished when the gate fails it",
         spec_path.display(),
         task.name,
-        options.trials,
-        options.seed,
-        options.share * 100.0
+        g.min_success,
+        g.confidence,
+        g.max_trials,
+        options.seed
     );
     if measured.interrupted {
         println!(
-            "interrupted: only the alternatives measured are listed, the last possibly on fewer trials"
+            "interrupted: only the alternatives measured are listed, the last possibly undecided"
         );
     }
     for k in &measured.keyframes {
@@ -91,22 +91,41 @@ fn print_groundings(
                 v => {
                     let causes: Vec<String> =
                         a.causes.iter().map(|(c, n)| format!("{c} {n}")).collect();
-                    let word = if *v == Verdict::Distinguished {
-                        "distinguished"
-                    } else {
-                        "NOT distinguished"
+                    let word = match v {
+                        Verdict::Distinguished => "distinguished",
+                        Verdict::NotDistinguished => "NOT distinguished",
+                        _ => "undecided",
                     };
                     let why = if causes.is_empty() {
                         String::new()
                     } else {
                         format!(" ({})", causes.join(", "))
                     };
-                    (format!("{}/{}", a.failed, a.trials), format!("{word}{why}"))
+                    let failed = match a.pass_rate {
+                        Some(r) => format!(
+                            "{}/{} (95 % CI {}–{})",
+                            a.failed,
+                            a.trials,
+                            percent(1.0 - r.upper),
+                            percent(1.0 - r.lower)
+                        ),
+                        None => format!("{}/{}", a.failed, a.trials),
+                    };
+                    (failed, format!("{word}{why}"))
                 }
             };
             table.row(vec![format!("  {}", a.reference), failed, verdict]);
         }
         print!("{}", table.render());
+    }
+    let undecided = measured
+        .keyframes
+        .iter()
+        .flat_map(|k| &k.alternatives)
+        .filter(|a| a.verdict == Verdict::Undecided)
+        .count();
+    if undecided > 0 {
+        println!("{undecided} alternative(s) undecided: the gate could not tell within its trials");
     }
     let weak: Vec<String> = measured
         .keyframes
@@ -116,17 +135,17 @@ fn print_groundings(
                 .map(move |a| format!("keyframe {} on {}", k.keyframe, a.reference))
         })
         .collect();
-    if weak.is_empty() {
+    if !weak.is_empty() {
+        println!(
+            "the randomization cannot tell these from the spec's references: {}",
+            weak.join(", ")
+        );
+    } else if undecided == 0 {
         let measured = if measured.interrupted {
             " measured"
         } else {
             ""
         };
         println!("every other reference{measured} is distinguished or equivalent");
-    } else {
-        println!(
-            "the randomization cannot tell these from the spec's references: {}",
-            weak.join(", ")
-        );
     }
 }

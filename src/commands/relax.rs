@@ -1,19 +1,19 @@
-//! `akl relax SPEC --task T -o relaxed.json`: every TSR widened as far as verification allows.
+//! `akl relax SPEC --task T -o relaxed.json`: every TSR widened as far as the deployment gate
+//! allows, each probe and gate printed as it ends.
 
+use super::execute::jobs;
 use super::robot::load as load_robot;
-use super::validate::{cli_error, exec_options, trials};
+use super::validate::{cli_error, exec_options, gate_options};
 use super::{check_output, load_spec_for, print_json};
 use crate::cli::RelaxArgs;
 use crate::exit::{CliError, CliResult};
-use crate::progress::Progress;
-use crate::table::Table;
 use akl_scene::builtin;
-use akl_validate::relax::{relax, RelaxOptions, Relaxation, Side};
-use akl_validate::{Trials, ValidateError};
+use akl_validate::relax::{relax, Event, GateRound, Probe, RelaxOptions, Relaxation};
+use akl_validate::ValidateError;
 use serde::Serialize;
 
-/// How far verification seeds start from the search's (`--seed`).
-const VERIFY_SEED_OFFSET: u64 = 1_000_000;
+/// How far the gates' seeds start from the search's (`--seed`).
+const GATE_SEED_OFFSET: u64 = 1_000_000;
 
 #[derive(Serialize)]
 struct Relaxed<'a> {
@@ -29,30 +29,35 @@ pub fn run(args: RelaxArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
     let spec = load_spec_for(&args.spec, &task)?;
-    let search = trials(args.trials, args.seed, &args.run)
-        .map_err(|_| CliError::input("--trials: needs at least one trial"))?;
-    if args.verify == 0 {
-        return Err(CliError::input("--verify: needs at least one trial"));
-    }
     let options = RelaxOptions {
-        search,
-        verify: Trials {
-            count: args.verify,
-            seed: args.seed.saturating_add(VERIFY_SEED_OFFSET),
-            jobs: search.jobs,
-        },
-        depth: args.depth,
+        seed: args.seed,
+        gate_seed: args.seed.saturating_add(GATE_SEED_OFFSET),
+        jobs: jobs(args.run.jobs)?,
+        screen: args.screen,
+        gate: gate_options(&args.gate)?,
         exec: exec_options(&args.run),
         ..RelaxOptions::default()
     };
-    let progress = Progress::new(
-        &format!("relaxing on `{}`", task.name),
-        options.most_trials(&spec),
-    );
-    let relaxation = relax(&robot, &task, &spec, &options, &|done, _| {
-        progress.set(done)
+    if !args.json {
+        println!(
+            "{} on task `{}`: screening up to {} trials per widening (seeds {}..), each keyframe's widening gated on fresh seeds (from {}): success {} at {:.0} % confidence",
+            args.spec.display(),
+            task.name,
+            options.screen,
+            options.seed,
+            options.gate_seed,
+            options.gate.min_success,
+            100.0 * options.gate.confidence
+        );
+    }
+    let relaxation = relax(&robot, &task, &spec, &options, &|event| {
+        if !args.json {
+            match event {
+                Event::Probe(p) => println!("{}", probe_line(p)),
+                Event::Gate(g) => println!("{}", gate_line(g)),
+            }
+        }
     });
-    progress.finish();
     let relaxation = relaxation.map_err(|e| match e {
         e @ ValidateError::SpecFails(_) => {
             CliError::internal(format!("{}: {e}", args.spec.display()))
@@ -76,71 +81,92 @@ pub fn run(args: RelaxArgs) -> CliResult {
     if args.json {
         print_json(&report)?;
     } else {
-        print_relaxation(&report, &options);
+        print_summary(&report);
     }
-    match &relaxation.relaxed {
-        Some(_) => Ok(()),
-        None => Err(CliError::internal(format!(
-            "{}: no relaxation passed its verification; nothing written",
+    match (&relaxation.relaxed, relaxation.interrupted) {
+        (_, true) => Err(CliError::interrupted(format!(
+            "interrupted after {} trials{}",
+            relaxation.trials,
+            if relaxation.relaxed.is_some() {
+                "; the widest gated spec was written"
+            } else {
+                "; nothing was gated, nothing written"
+            }
+        ))),
+        (Some(_), false) => Ok(()),
+        (None, false) => Err(CliError::internal(format!(
+            "{}: no widening passed its gate; nothing written",
             args.spec.display()
         ))),
     }
+}
+
+/// A bound in its unit: millimetres for x, y and z, radians for the turns.
+fn bound(axis: &str, v: f64) -> String {
+    if matches!(axis, "x" | "y" | "z") {
+        format!("{:+.1} mm", v * 1e3)
+    } else {
+        format!("{:+.3} rad", v)
+    }
+}
+
+fn probe_line(p: &Probe) -> String {
+    let verdict = match (&p.rejected_by, p.kept) {
+        (_, true) => "screened, kept".to_string(),
+        (Some(why), _) => format!("rejected: {why}"),
+        (None, false) => "interrupted".to_string(),
+    };
+    format!(
+        "  keyframe {} {:<5} [{}, {}] → [{}, {}]: {} trial(s), {verdict}",
+        p.keyframe,
+        p.axis,
+        bound(p.axis, p.from[0]),
+        bound(p.axis, p.from[1]),
+        bound(p.axis, p.to[0]),
+        bound(p.axis, p.to[1]),
+        p.trials
+    )
+}
+
+fn gate_line(g: &GateRound) -> String {
+    let what = match g.keyframe {
+        None => "the spec as given".to_string(),
+        Some(k) => format!("keyframe {k} at {:.0} % of its widening", 100.0 * g.kept),
+    };
+    format!(
+        "gate on {what} (seeds {}..): {} — passed {}{}",
+        g.seed,
+        g.decision.map_or("interrupted", |d| d.label()),
+        g.outcome.pass_rate,
+        g.outcome
+            .first_failure_text()
+            .map_or(String::new(), |f| format!("; first failure: {f}"))
+    )
 }
 
 fn bits(b: Option<f64>) -> String {
     b.map_or("no trace".into(), |b| format!("{b:.1}"))
 }
 
-fn print_relaxation(r: &Relaxed, options: &RelaxOptions) {
+fn print_summary(r: &Relaxed) {
     let x = r.relaxation;
+    let gains: Vec<String> = x
+        .volume_gain
+        .iter()
+        .enumerate()
+        .map(|(k, g)| format!("keyframe {k} {g:+.1}"))
+        .collect();
     println!(
-        "{} on task `{}`: {} trials per probe (seeds {}..), bisection depth {}; {} trials in all",
-        r.spec, r.task, options.search.count, options.search.seed, options.depth, x.trials
+        "TSR volume gained: {:+.1} bits ({}); {} trials in all",
+        x.volume_gained(),
+        gains.join(", "),
+        x.trials
     );
-    let widened: Vec<_> = x.bounds.iter().filter(|b| b.widened()).collect();
-    if widened.is_empty() {
-        println!("no bound could be widened");
-    } else {
-        let mut table = Table::new(["keyframe", "axis", "bound", "from", "to", "probes"]);
-        for b in widened {
-            let unit = |v: f64| {
-                if matches!(b.axis, "x" | "y" | "z") {
-                    format!("{:+.1} mm", v * 1e3)
-                } else {
-                    format!("{:+.3} rad", v)
-                }
-            };
-            table.row(vec![
-                b.keyframe.to_string(),
-                b.axis.to_string(),
-                match b.side {
-                    Side::Max => "max".into(),
-                    Side::Min => "min".into(),
-                },
-                unit(b.from),
-                unit(b.to),
-                b.probes.to_string(),
-            ]);
-        }
-        print!("{}", table.render());
-    }
-    for v in &x.verifications {
-        println!(
-            "verification on fresh seeds {}..: {}/{} passed, {:.0} % of the widening kept{}",
-            v.seed,
-            v.outcome.passed,
-            v.outcome.run,
-            v.kept * 100.0,
-            v.outcome
-                .first_failure_text()
-                .map_or(String::new(), |f| format!(" — {f}"))
-        );
-    }
     let gained = x
         .bits_gained()
         .map_or(String::new(), |g| format!(" ({g:+.1})"));
     println!(
-        "bits of freedom: {} before, {} after{gained}",
+        "bits of execution traces: {} before, {} after{gained}",
         bits(x.bits_before),
         bits(x.bits_after)
     );

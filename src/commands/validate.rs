@@ -2,50 +2,72 @@
 
 use super::execute::{jobs, pose_noise};
 use super::robot::load as load_robot;
-use super::{load_calibration, load_spec_for, print_json};
-use crate::cli::{TrialArgs, ValidateArgs};
-use crate::exit::{CliError, CliResult};
+use super::{check_output, load_calibration, load_spec_for, print_json};
+use crate::cli::{GateArgs, TrialArgs, ValidateArgs};
+use crate::exit::{CliError, CliResult, NOT_MINIMAL, UNDECIDED};
 use crate::progress::Progress;
 use crate::table::Table;
+use akl_exec::batch::{settings, Batch, BatchOptions};
 use akl_exec::error::ExecError;
+use akl_exec::report::BatchReport;
 use akl_exec::trial::ExecOptions;
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::{Demo, LearnOptions};
+use akl_planner::Robot;
 use akl_scene::{builtin, Task};
+use akl_stats::{Gate, GateOptions, GateVerdict};
+use akl_tsr::TaskSpec;
 use akl_validate::ablation::Ablation;
 use akl_validate::answers::{AnswerVerdict, Answers, DemoSource};
-use akl_validate::{
-    validate, Outcome, Trials, ValidateError, ValidateOptions, Validation, Verdict,
-};
+use akl_validate::trials::verifying;
+use akl_validate::validation::Stage;
+use akl_validate::{validate, Outcome, ValidateError, ValidateOptions, Validation, Verdict};
 use serde::Serialize;
 use std::path::Path;
+use std::time::Instant;
+
+/// How many failed trials the text lists, each with its replay command.
+const LISTED_FAILURES: usize = 10;
 
 #[derive(Serialize)]
 struct Validated<'a> {
-    spec: String,
+    /// The spec's file (`spec` holds its gated trials).
+    spec_file: String,
     task: String,
     demo: Option<String>,
+    report_file: Option<String>,
+    trace_file: Option<String>,
+    /// The command that replays each failed trial of the spec.
+    replays: Vec<Replay>,
     #[serde(flatten)]
     validation: &'a Validation,
 }
 
-/// The trials `--randomize N --seed S --jobs J` ask for.
-pub(crate) fn trials(count: usize, seed: u64, args: &TrialArgs) -> Result<Trials, CliError> {
-    if count == 0 {
-        return Err(CliError::input("--randomize: needs at least one trial"));
-    }
-    Ok(Trials {
-        count,
-        seed,
-        jobs: jobs(args.jobs)?,
-    })
+/// A failed trial of the spec and how to see it again.
+#[derive(Serialize)]
+struct Replay {
+    seed: u64,
+    command: String,
 }
 
-/// Execution settings from `--pose-noise`.
+/// The gate `--min-success`, `--confidence` and `--max-trials` ask for (checked: bad values
+/// exit 2).
+pub(crate) fn gate_options(args: &GateArgs) -> Result<GateOptions, CliError> {
+    let options = GateOptions {
+        min_success: args.min_success,
+        confidence: args.confidence,
+        max_trials: args.max_trials,
+    };
+    Gate::new(options).map_err(CliError::input)?;
+    Ok(options)
+}
+
+/// Execution settings from `--pose-noise`, stopped by Ctrl-C.
 pub(crate) fn exec_options(args: &TrialArgs) -> ExecOptions {
     ExecOptions {
         noise: pose_noise(args.pose_noise),
+        interrupt: crate::stop::interrupt(),
         ..ExecOptions::default()
     }
 }
@@ -92,12 +114,36 @@ fn read_demo(path: &Path, task: &Task) -> Result<Demo, CliError> {
     Ok(demo)
 }
 
+/// The `akl execute` command that replays the validation trial of `seed`.
+fn replay_command(args: &ValidateArgs, seed: u64) -> String {
+    let mut command = format!(
+        "akl execute {} --task {} --seed {seed} --randomize 1 --goals sampled",
+        args.spec.display(),
+        args.task
+    );
+    let noise = args.trials.pose_noise;
+    if (noise.millimetres, noise.degrees) != (2.0, 1.0) {
+        command += &format!(" --pose-noise {},{}", noise.millimetres, noise.degrees);
+    }
+    if let Some(robot) = &args.robot.robot {
+        command += &format!(" --robot {}", robot.display());
+    }
+    command + &format!(" --trace trial-{seed}.mcap")
+}
+
 pub fn run(args: ValidateArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
     let spec = load_spec_for(&args.spec, &task)?;
+    for (path, what) in [(&args.report, "report"), (&args.trace, "trace")] {
+        if let Some(p) = path {
+            check_output(p, what)?;
+        }
+    }
     let options = ValidateOptions {
-        trials: trials(args.randomize, args.seed, &args.trials)?,
+        seed: args.seed,
+        jobs: jobs(args.trials.jobs)?,
+        gate: gate_options(&args.gate)?,
         exec: exec_options(&args.trials),
     };
     let demo = match &args.demo {
@@ -114,14 +160,24 @@ pub fn run(args: ValidateArgs) -> CliResult {
         calibration: &calibration,
         learn: &learn,
     });
-    let checks = 1 + akl_validate::ablation::removals(&spec).len();
+    let removals = akl_validate::ablation::removals(&spec).len();
     let progress = Progress::new(
         &format!("validating on `{}`", task.name),
-        checks * args.randomize,
+        options.gate.max_trials,
     );
-    let validation = validate(&robot, &task, &spec, &options, source, &|done, _| {
-        progress.set(done * args.randomize)
-    });
+    let started = Instant::now();
+    let validation = validate(
+        &robot,
+        &task,
+        &spec,
+        &options,
+        source,
+        &|stage, n| match stage {
+            Stage::Spec => progress.set(n),
+            Stage::Removal(done) => progress.relabel(&format!("removal {done} of {removals}")),
+            Stage::Answer(done) => progress.relabel(&format!("answer {done}")),
+        },
+    );
     progress.finish();
     let validation = validation.map_err(|e| match (e, &args.demo) {
         (
@@ -130,29 +186,154 @@ pub fn run(args: ValidateArgs) -> CliResult {
         ) => CliError::input(format!("{}: {e}", p.display())),
         (e, _) => cli_error(e, &args.spec, &task),
     })?;
+    let wall = started.elapsed().as_secs_f64();
+    let report_file = match &args.report {
+        Some(p) => {
+            let report = spec_report(&task, &spec, &options, &validation, wall);
+            report
+                .save(p)
+                .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
+            Some(p.display().to_string())
+        }
+        None => None,
+    };
+    let trace_file = match &args.trace {
+        Some(p) if !validation.interrupted => {
+            write_trace(
+                &robot,
+                &task,
+                &spec,
+                &options,
+                &validation,
+                args.trace_trial,
+                p,
+            )?;
+            Some(p.display().to_string())
+        }
+        _ => None,
+    };
+    let replays = validation
+        .spec
+        .outcome
+        .failed_seeds
+        .iter()
+        .map(|&seed| Replay {
+            seed,
+            command: replay_command(&args, seed),
+        })
+        .collect();
+    let validated = Validated {
+        spec_file: args.spec.display().to_string(),
+        task: task.name.clone(),
+        demo: args.demo.as_ref().map(|p| p.display().to_string()),
+        report_file,
+        trace_file,
+        replays,
+        validation: &validation,
+    };
     if args.json {
-        print_json(&Validated {
-            spec: args.spec.display().to_string(),
-            task: task.name.clone(),
-            demo: args.demo.as_ref().map(|p| p.display().to_string()),
-            validation: &validation,
-        })?;
+        print_json(&validated)?;
     } else {
-        print_validation(&args, &task, &validation);
+        print_validation(&args, &task, &validated);
     }
+    let name = args.spec.display();
     match validation.verdict {
-        Verdict::Passes => Ok(()),
-        v => Err(CliError::internal(format!(
-            "{}: {}",
-            args.spec.display(),
-            v.label()
+        Some(Verdict::Passes) => Ok(()),
+        Some(Verdict::Fails) => Err(CliError::internal(format!("{name}: fails"))),
+        Some(Verdict::Undecided) => Err(CliError::verdict(
+            UNDECIDED,
+            format!(
+                "{name}: undecided within {} trials",
+                options.gate.max_trials
+            ),
+        )),
+        Some(Verdict::NotMinimal) => Err(CliError::verdict(
+            NOT_MINIMAL,
+            format!("{name}: not minimal"),
+        )),
+        None => Err(CliError::interrupted(format!(
+            "interrupted: {} trials of the spec judged",
+            validation.spec.outcome.run
         ))),
     }
 }
 
-/// `passed/run`.
+/// The spec's trials as a report in `akl execute --report`'s format, with the gate.
+fn spec_report(
+    task: &Task,
+    spec: &TaskSpec,
+    options: &ValidateOptions,
+    validation: &Validation,
+    wall: f64,
+) -> BatchReport {
+    let mut report = BatchReport::new(
+        &task.name,
+        &spec.method,
+        options.seed,
+        true,
+        validation.spec.reports.clone(),
+        options.jobs,
+        wall,
+        settings(&verifying(&options.exec), spec),
+    );
+    report.gate = Some(GateVerdict {
+        options: options.gate,
+        decision: validation.spec.decision,
+    });
+    report.interrupted = validation.interrupted;
+    report
+}
+
+/// Writes trial `trial` of the spec's trials (default: the first that failed, else the first)
+/// as an MCAP trace.
+fn write_trace(
+    robot: &Robot,
+    task: &Task,
+    spec: &TaskSpec,
+    options: &ValidateOptions,
+    validation: &Validation,
+    trial: Option<usize>,
+    path: &Path,
+) -> CliResult {
+    let outcome = &validation.spec.outcome;
+    let i = match trial {
+        Some(i) if i >= outcome.run => {
+            return Err(CliError::input(format!(
+                "--trace-trial {i}: the gate read only {} trials (0 to {})",
+                outcome.run,
+                outcome.run.saturating_sub(1)
+            )))
+        }
+        Some(i) => i,
+        None => outcome
+            .failed_seeds
+            .first()
+            .map_or(0, |s| (s - options.seed) as usize),
+    };
+    let exec = verifying(&options.exec);
+    let batch = Batch::new(
+        robot,
+        task,
+        spec,
+        &exec,
+        BatchOptions {
+            trials: 1,
+            randomize: true,
+            seed: options.seed + i as u64,
+            jobs: 1,
+        },
+    )
+    .map_err(CliError::internal)?;
+    let one = batch.run(&|_| {}).map_err(CliError::internal)?;
+    batch
+        .write_trace(&one, Some(0), path)
+        .map_err(|e| CliError::internal(format!("{}: {e}", path.display())))?;
+    Ok(())
+}
+
+/// `passed/run (rate, 95 % CI)`.
 fn passed_of(o: &Outcome) -> String {
-    format!("{}/{}", o.passed, o.run)
+    o.pass_rate.to_string()
 }
 
 fn first_cause(o: &Outcome) -> String {
@@ -167,13 +348,19 @@ fn removal_row(a: &Ablation) -> Vec<String> {
         (None, Some(why)) => ("-".into(), format!("not a spec: {why}")),
         (None, None) => ("-".into(), "-".into()),
     };
-    let essential = if a.essential { "yes" } else { "NO" };
-    vec![a.what.clone(), trials, essential.into(), why]
+    let gate = a.decision.map_or("-", |d| d.label());
+    vec![
+        a.what.clone(),
+        trials,
+        gate.into(),
+        a.essential.label().into(),
+        why,
+    ]
 }
 
 fn print_answers(demo: &Path, answers: &Answers) {
     println!(
-        "answers of {} (the spec AKL learns from it {} the spec validated; it has {} line(s) and passed {}):",
+        "answers of {} (the spec AKL learns from it {} the spec validated; it has {} line(s) and {} the gate, {}):",
         demo.display(),
         if answers.spec_is_learned_from_demo {
             "is"
@@ -181,6 +368,7 @@ fn print_answers(demo: &Path, answers: &Answers) {
             "is not"
         },
         answers.lines,
+        answers.baseline_decision.map_or("was not judged by", |d| d.label()),
         passed_of(&answers.baseline),
     );
     if answers.checks.is_empty() {
@@ -193,7 +381,7 @@ fn print_answers(demo: &Path, answers: &Answers) {
         "given",
         "flipped to",
         "lines then",
-        "passed then",
+        "gate then",
         "verdict",
     ]);
     for c in &answers.checks {
@@ -206,8 +394,12 @@ fn print_answers(demo: &Path, answers: &Answers) {
                 }
             }
             AnswerVerdict::Confirmed => "confirmed",
-            AnswerVerdict::Inconclusive => "inconclusive: the flip does not fix most failures",
+            AnswerVerdict::Undecided => "undecided: the gates cannot tell",
             AnswerVerdict::Unchanged => "unchanged: the flip learns the same spec",
+        };
+        let then = match (&c.decision, &c.outcome) {
+            (Some(d), Some(o)) => format!("{} ({}/{})", d.label(), o.passed, o.run),
+            _ => "-".into(),
         };
         table.row(vec![
             format!("  {}", c.index),
@@ -215,60 +407,76 @@ fn print_answers(demo: &Path, answers: &Answers) {
             format!("{:?}", c.answer).to_lowercase(),
             format!("{:?}", c.flipped_to).to_lowercase(),
             c.lines_when_flipped.to_string(),
-            c.outcome.as_ref().map_or("-".into(), passed_of),
+            then,
             verdict.into(),
         ]);
     }
     print!("{}", table.render());
 }
 
-fn print_validation(args: &ValidateArgs, task: &Task, v: &Validation) {
-    let n = v.trials.count;
+fn print_validation(args: &ValidateArgs, task: &Task, x: &Validated) {
+    let v = x.validation;
+    let g = &v.gate;
     println!(
-        "{} on task `{}`: {} randomized trials (seeds {}..{}), goals drawn across every TSR",
+        "{} on task `{}`: does it succeed with probability at least {} at {:.0} % confidence? \
+         Randomized trials from seed {} (at most {}), goals drawn across every TSR",
         args.spec.display(),
         task.name,
-        n,
-        v.trials.seed,
-        v.trials.seed + n as u64 - 1
+        g.min_success,
+        100.0 * g.confidence,
+        v.seed,
+        g.max_trials
     );
-    let o = &v.outcome;
+    let o = &v.spec.outcome;
     let causes: Vec<String> = o.failures.iter().map(|(c, k)| format!("{c} {k}")).collect();
     println!(
-        "spec: passed {}{}",
+        "spec: {} — passed {}{}",
+        v.spec.decision.map_or("interrupted", |d| d.label()),
         passed_of(o),
         if causes.is_empty() {
             String::new()
         } else {
-            format!(" (failed: {})", causes.join(", "))
+            format!("; failed by root cause: {}", causes.join(", "))
         }
     );
-    if let Some(f) = o.first_failure_text() {
-        println!("  first failure: {f}");
+    if !x.replays.is_empty() {
+        println!("failed trials, and how to replay each:");
+        for r in x.replays.iter().take(LISTED_FAILURES) {
+            println!("  seed {}: {}", r.seed, r.command);
+        }
+        if x.replays.len() > LISTED_FAILURES {
+            println!("  ... {} more", x.replays.len() - LISTED_FAILURES);
+        }
+        if let Some(f) = o.first_failure_text() {
+            println!("  first failure: {f}");
+        }
     }
-    let seeds = if o.passed == 0 {
-        "on every seed (the spec passed none)"
-    } else {
-        "on the seeds the spec passed"
-    };
-    println!(
-        "without each keyframe and each line, {seeds}, each run stopped at its first failure:"
-    );
-    let mut table = Table::new(["  removed", "passed", "essential", "first failure"]);
-    for a in &v.removals {
-        let mut row = removal_row(a);
-        row[0] = format!("  {}", row[0]);
-        table.row(row);
+    if !v.removals.is_empty() {
+        println!("without each keyframe and each line, judged by the same gate on the same seeds:");
+        let mut table = Table::new(["  removed", "passed", "gate", "essential", "first failure"]);
+        for a in &v.removals {
+            let mut row = removal_row(a);
+            row[0] = format!("  {}", row[0]);
+            table.row(row);
+        }
+        print!("{}", table.render());
     }
-    print!("{}", table.render());
     if let (Some(answers), Some(demo)) = (&v.answers, &args.demo) {
         print_answers(demo, answers);
+    }
+    for (file, what) in [(&x.report_file, "report"), (&x.trace_file, "trace")] {
+        if let Some(f) = file {
+            println!("{what}: {f}");
+        }
+    }
+    if v.interrupted {
+        println!("interrupted: only what finished is listed");
     }
     let superfluous: Vec<&str> = v.not_essential().map(|a| a.what.as_str()).collect();
     let mut reasons = Vec::new();
     if !superfluous.is_empty() {
         reasons.push(format!(
-            "not essential: {} (the spec passes every trial without it)",
+            "not essential: {} (the spec passes the gate without it)",
             superfluous.join(", ")
         ));
     }
@@ -278,7 +486,7 @@ fn print_validation(args: &ValidateArgs, task: &Task, v: &Validation) {
     }
     println!(
         "verdict: {}{}",
-        v.verdict.label(),
+        v.verdict.map_or("none (interrupted)", |v| v.label()),
         if reasons.is_empty() {
             String::new()
         } else {

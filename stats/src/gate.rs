@@ -103,6 +103,16 @@ impl Decision {
     }
 }
 
+/// What a gate asked and what it decided, as reports record it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GateVerdict {
+    /// What it asked.
+    #[serde(flatten)]
+    pub options: GateOptions,
+    /// Its decision (`None`: interrupted before it decided).
+    pub decision: Option<Decision>,
+}
+
 /// The gate's boundaries for every trial count up to its maximum.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Gate {

@@ -8,5 +8,5 @@
 pub mod gate;
 pub mod interval;
 
-pub use gate::{Decision, Gate, GateError, GateOptions, OperatingPoint};
+pub use gate::{Decision, Gate, GateError, GateOptions, GateVerdict, OperatingPoint};
 pub use interval::PassRate;

@@ -1,24 +1,24 @@
 //! Least restrictive by ablation (thesis Theorem 3.2.3): a keyframe, or a `move_in_line`, is
-//! essential when the spec without it fails. Every removal is executed on the same seeds as
-//! the spec; a removal that still passes every trial is not essential, and the spec that keeps
-//! it gives the planner fewer execution traces than it could (Lemma 3.2.1).
-//!
-//! A removal is judged on the trials the spec itself passed: a trial the spec fails says
-//! nothing of what the removal takes away (and when the spec passes none, on all of them).
-//! Planned with goals drawn from each keyframe's own stream
+//! essential when the spec without it fails. Every removal is judged by the same deployment
+//! gate as the spec ([`akl_stats::gate`]), on trials from the same seed: the spec without it
+//! is *not essential* when it passes the gate (it gives the planner more execution traces and
+//! still succeeds as often as a deployment needs, Lemma 3.2.1), *essential* when it fails the
+//! gate, and *undecided* when the gate cannot tell. The verdict no longer depends on how many
+//! trials were asked for: a removal that fails one trial in fifty is essential whether 20 or
+//! 2,000 trials would have run. Planned with goals drawn from each keyframe's own stream
 //! ([`akl_planner::goal::keyframe_stream`]), the spec and the spec without a keyframe reach
-//! every other keyframe at the same goals in the same trial, so the two are compared on the
-//! same draws.
+//! every other keyframe at the same goals in the same trial.
 //!
 //! Removing a keyframe removes the line that ends at it (a line is a property of the segment
 //! into its end keyframe); a line out of it then starts at the keyframe before. Removing a
 //! line keeps both its keyframes and lets the planner move freely between them.
 
-use crate::trials::{run_seeds, Outcome, Stop, Trials};
+use crate::trials::{run_gated, Outcome};
 use crate::ValidateError;
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::{Decision, Gate};
 use akl_tsr::{Constraint, TaskSpec};
 use serde::Serialize;
 
@@ -75,6 +75,29 @@ pub fn without(spec: &TaskSpec, removal: Removal) -> TaskSpec {
     out
 }
 
+/// Whether a spec needs what a removal takes out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Necessity {
+    /// The spec without it fails the gate, or is no spec at all.
+    Essential,
+    /// The spec without it passes the gate: the spec is more restrictive than it needs be.
+    NotEssential,
+    /// The gate could not tell within its trials (or was interrupted).
+    Undecided,
+}
+
+impl Necessity {
+    /// In words, as tables print it.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Necessity::Essential => "yes",
+            Necessity::NotEssential => "NO",
+            Necessity::Undecided => "undecided",
+        }
+    }
+}
+
 /// What the trials said of one removal.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Ablation {
@@ -83,61 +106,70 @@ pub struct Ablation {
     pub removal: Removal,
     /// The same, in words.
     pub what: String,
-    /// Whether the spec needs it: the spec without it failed a trial, or is no spec at all.
-    pub essential: bool,
+    /// Whether the spec needs it.
+    pub essential: Necessity,
+    /// The gate's decision on the spec without it (`None` when that is no spec, or when the
+    /// run was interrupted).
+    pub decision: Option<Decision>,
     /// Why the spec without it is no spec (e.g. a line left with nothing to start from).
     pub invalid: Option<String>,
-    /// The trials of the spec without it (none when it is no spec) on the seeds the spec
-    /// passed, stopped at the first failure.
+    /// The trials of the spec without it that the gate read (none when it is no spec).
     pub outcome: Option<Outcome>,
 }
 
-/// Executes `spec` without each of its [`removals`] on the trials of `trials` that the spec
-/// passed (`spec_outcome`: the spec's own outcome on `trials`); `progress` is called after
-/// each removal with it and (done, total).
+/// Judges `spec` without each of its [`removals`] with `gate`, trials from `seed`, `jobs` at a
+/// time; `progress` is called after each removal with it and (done, total).
+#[allow(clippy::too_many_arguments)]
 pub fn ablate(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
-    spec_outcome: &Outcome,
     exec: &ExecOptions,
-    trials: &Trials,
+    gate: &Gate,
+    seed: u64,
+    jobs: usize,
     progress: &(dyn Fn(&Ablation, usize, usize) + Sync),
 ) -> Result<Vec<Ablation>, ValidateError> {
-    trials.check()?;
     let all = removals(spec);
-    let mut seeds = spec_outcome.passed_seeds(trials);
-    if seeds.is_empty() {
-        seeds = trials.seeds();
-    }
     let mut out = Vec::with_capacity(all.len());
     for (done, removal) in all.into_iter().enumerate() {
+        if exec.interrupt.raised() {
+            break;
+        }
         let reduced = without(spec, removal);
         let what = removal.describe(spec);
         let ablation = match reduced.validate() {
             Err(e) => Ablation {
                 removal,
                 what,
-                essential: true,
+                essential: Necessity::Essential,
+                decision: None,
                 invalid: Some(e.to_string()),
                 outcome: None,
             },
             Ok(()) => {
-                let outcome = run_seeds(
+                let gated = run_gated(
                     robot,
                     task,
                     &reduced,
                     exec,
-                    &seeds,
-                    trials.jobs,
-                    Stop::AtFirstFailure,
+                    gate,
+                    seed,
+                    jobs,
+                    false,
+                    &|_| {},
                 )?;
                 Ablation {
                     removal,
                     what,
-                    essential: !outcome.all_passed(),
+                    essential: match gated.decision {
+                        Some(Decision::Fails) => Necessity::Essential,
+                        Some(Decision::Passes) => Necessity::NotEssential,
+                        Some(Decision::Undecided) | None => Necessity::Undecided,
+                    },
+                    decision: gated.decision,
                     invalid: None,
-                    outcome: Some(outcome),
+                    outcome: Some(gated.outcome),
                 }
             }
         };
@@ -184,23 +216,20 @@ mod tests {
         // One keyframe: without it there is nothing left.
         let mut one = task.truth.clone().unwrap();
         one.keyframes.truncate(1);
-        let trials = Trials {
-            count: 2,
-            seed: 0,
-            jobs: 1,
-        };
+        let gate = Gate::new(akl_stats::GateOptions::default()).unwrap();
         let found = ablate(
             &robot,
             &task,
             &one,
-            &Outcome::default(),
             &ExecOptions::default(),
-            &trials,
+            &gate,
+            0,
+            1,
             &|_, _, _| {},
         )
         .unwrap();
         assert_eq!(found.len(), 1);
-        assert!(found[0].essential && found[0].outcome.is_none());
+        assert!(found[0].essential == Necessity::Essential && found[0].outcome.is_none());
         assert!(found[0].invalid.as_deref().unwrap().contains("keyframe"));
     }
 }

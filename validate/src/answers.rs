@@ -8,24 +8,24 @@
 //! replayed through the online detector and the dialogue ([`akl_learn::teach::stream_demo`]),
 //! each query answered as the teacher answered the latest recorded query at or before it (a
 //! teacher asked again about the same stretch answers alike), the flipped one the other way.
-//! Then:
-//! - a "no" is **contradicted** when the spec learned with it fails trials and the spec
-//!   learned with "yes" there (the line restored) passes most of those: the line was needed
-//!   (most, not all: a trial can fail for reasons the line does not touch, and then fails
-//!   with the line too, the keyframes both specs share drawing the same goals);
+//! Then every spec is judged by the deployment gate ([`akl_stats::gate`]), on trials from the
+//! same seed:
+//! - a "no" is **contradicted** when the spec learned with it fails the gate and the spec
+//!   learned with "yes" there (the line restored) passes it: the line was needed. It is
+//!   **confirmed** when the spec learned with it passes. When restoring the line does not make
+//!   the spec pass either, something else fails first and the trials cannot tell whether the
+//!   line was needed: undecided;
 //! - a "yes" (or an "I don't know", which keeps the line too) is **contradicted** when the
-//!   spec learned with "no" there (the line dropped) still passes every trial (of those the
-//!   spec learned with the answers as given passed, as [`crate::ablation`] judges);
-//! - otherwise the answer is **confirmed** (a "no" whose spec passes every trial, a "yes"
-//!   whose line dropped fails), or **inconclusive** (a "no" whose restored line turns at most
-//!   half of the failed trials into passes); an answer whose flip learns the same spec is
-//!   **unchanged**.
+//!   spec learned with "no" there (the line dropped) passes the gate: the line was not needed.
+//!   It is **confirmed** when the line dropped fails the gate while the spec with it passes;
+//! - otherwise, when a gate could not decide or both specs fail, the answer is **undecided**;
+//!   an answer whose flip learns the same spec is **unchanged**.
 //!
 //! The answers are judged on the spec AKL learns from the demonstration as recorded (the
 //! baseline), which is the spec validated when that spec was learned from this demonstration
 //! with the same settings; the report says whether it is.
 
-use crate::trials::{run_seeds, run_trials, Outcome, Stop, Trials};
+use crate::trials::{run_gated, Gated, Outcome};
 use crate::ValidateError;
 use akl_exec::trial::ExecOptions;
 use akl_learn::baselines::kd::marked_frames;
@@ -34,6 +34,7 @@ use akl_learn::teach::{session_header, stream_demo, Pace};
 use akl_learn::{learn_spec, Answer, Calibration, Demo, DialogueKind, LearnOptions, Method};
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::{Decision, Gate};
 use akl_tsr::TaskSpec;
 use serde::Serialize;
 
@@ -45,10 +46,9 @@ pub enum AnswerVerdict {
     Contradicted,
     /// The simulation agrees with the answer.
     Confirmed,
-    /// The flip turns at most half of the failed trials into passes: a "no" whose line,
-    /// restored, does not fix most failures, or a "yes" of a spec that passes no trial, whose
-    /// line dropped does not either.
-    Inconclusive,
+    /// The gates could not tell (one undecided, or a spec that fails with and without the
+    /// line).
+    Undecided,
     /// Flipping the answer learns the same spec.
     Unchanged,
 }
@@ -68,8 +68,9 @@ pub struct AnswerCheck {
     pub flipped_to: Answer,
     /// `move_in_line` segments of the spec learned with the flip.
     pub lines_when_flipped: usize,
-    /// The trials of the spec learned with the flip, when they were needed: for a "no", on
-    /// the seeds the spec failed; otherwise on those it passed, stopped at the first failure.
+    /// The gate's decision on the spec learned with the flip, when it was needed.
+    pub decision: Option<Decision>,
+    /// The trials of the spec learned with the flip that the gate read, when it ran.
     pub outcome: Option<Outcome>,
     /// The verdict.
     pub verdict: AnswerVerdict,
@@ -82,7 +83,9 @@ pub struct Answers {
     pub spec_is_learned_from_demo: bool,
     /// `move_in_line` segments of the spec learned from the demonstration as recorded.
     pub lines: usize,
-    /// Its trials (the validated spec's own when it is that spec).
+    /// The gate's decision on it (the validated spec's own when it is that spec).
+    pub baseline_decision: Option<Decision>,
+    /// Its trials the gate read.
     pub baseline: Outcome,
     /// One check per answer, in the order given.
     pub checks: Vec<AnswerCheck>,
@@ -197,18 +200,20 @@ pub struct DemoSource<'a> {
     pub learn: &'a LearnOptions,
 }
 
-/// Judges every answer of `source`, the demonstration `spec` was learned from, executing on
-/// `trials` (`spec_outcome`: `spec`'s own trials on them); `progress` is called after each
-/// answer with (done, total).
+/// Judges every answer of `source`, the demonstration `spec` was learned from, with `gate`
+/// on trials from `seed` (`spec_gated`: `spec`'s own gated trials from that seed); `progress`
+/// is called after each answer with (done, total).
 #[allow(clippy::too_many_arguments)]
 pub fn check_answers(
     robot: &Robot,
     task: &Task,
     source: DemoSource,
     spec: &TaskSpec,
-    spec_outcome: &Outcome,
+    spec_gated: &Gated,
     exec: &ExecOptions,
-    trials: &Trials,
+    gate: &Gate,
+    seed: u64,
+    jobs: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Answers, ValidateError> {
     let demo = source.demo;
@@ -225,12 +230,14 @@ pub fn check_answers(
             ReplayedAnswers::new(recorded.clone(), flip),
         )
     };
+    let gated =
+        |spec: &TaskSpec| run_gated(robot, task, spec, exec, gate, seed, jobs, false, &|_| {});
     let baseline = learned(None)?;
     let same = same_keyframes(&baseline, spec);
-    let baseline_outcome = if same {
-        spec_outcome.clone()
+    let baseline_gated = if same {
+        spec_gated.clone()
     } else {
-        run_trials(robot, task, &baseline, exec, trials, Stop::Never)?
+        gated(&baseline)?
     };
     let answers: Vec<(f64, usize, Answer)> = demo
         .events
@@ -241,40 +248,24 @@ pub fn check_answers(
         })
         .collect();
     debug_assert_eq!(answers.len(), recorded.len());
-    let passed = baseline_outcome.passed_seeds(trials);
     let mut checks = Vec::with_capacity(answers.len());
     for (index, (t, frame, answer)) in answers.iter().copied().enumerate() {
+        if exec.interrupt.raised() {
+            break;
+        }
         let flipped_to = match answer {
             Answer::No => Answer::Yes,
             Answer::Yes | Answer::Unknown => Answer::No,
         };
         let flipped = learned(Some((index, flipped_to)))?;
-        let (outcome, verdict) = if same_keyframes(&flipped, &baseline) {
-            (None, AnswerVerdict::Unchanged)
-        } else if answer == Answer::No && baseline_outcome.all_passed() {
-            (None, AnswerVerdict::Confirmed)
+        let (decision, outcome, verdict) = if same_keyframes(&flipped, &baseline) {
+            (None, None, AnswerVerdict::Unchanged)
+        } else if answer == Answer::No && baseline_gated.decision == Some(Decision::Passes) {
+            (None, None, AnswerVerdict::Confirmed)
         } else {
-            // A "no": the line restored, on the trials the spec failed without it. The trials
-            // that fail for reasons the line does not touch fail alike with it (the keyframes
-            // both specs share draw the same goals), so a majority turned into passes is the
-            // line's doing. A "yes" of a spec that passed no trial is judged the same way, the
-            // line dropped: no trial can show the line is needed.
-            // Otherwise a "yes": the line dropped, judged like a removal on the trials the spec
-            // passed with it.
-            let on_failures = answer == Answer::No || passed.is_empty();
-            let (seeds, stop) = if on_failures {
-                (&baseline_outcome.failed_seeds, Stop::Never)
-            } else {
-                (&passed, Stop::AtFirstFailure)
-            };
-            let outcome = run_seeds(robot, task, &flipped, exec, seeds, trials.jobs, stop)?;
-            let verdict = match (on_failures, outcome.all_passed()) {
-                (true, _) if 2 * outcome.passed > outcome.run => AnswerVerdict::Contradicted,
-                (true, _) => AnswerVerdict::Inconclusive,
-                (false, true) => AnswerVerdict::Contradicted,
-                (false, false) => AnswerVerdict::Confirmed,
-            };
-            (Some(outcome), verdict)
+            let run = gated(&flipped)?;
+            let verdict = judge(answer, baseline_gated.decision, run.decision);
+            (run.decision, Some(run.outcome), verdict)
         };
         checks.push(AnswerCheck {
             index,
@@ -283,6 +274,7 @@ pub fn check_answers(
             answer,
             flipped_to,
             lines_when_flipped: flipped.line_count(),
+            decision,
             outcome,
             verdict,
         });
@@ -291,9 +283,23 @@ pub fn check_answers(
     Ok(Answers {
         spec_is_learned_from_demo: same,
         lines: baseline.line_count(),
-        baseline: baseline_outcome,
+        baseline_decision: baseline_gated.decision,
+        baseline: baseline_gated.outcome,
         checks,
     })
+}
+
+/// The verdict on `answer` from the gate's decisions on the spec learned with it (`with`) and
+/// with it flipped (`flipped`).
+fn judge(answer: Answer, with: Option<Decision>, flipped: Option<Decision>) -> AnswerVerdict {
+    use Decision::{Fails, Passes};
+    match (answer, with, flipped) {
+        (Answer::No, Some(Passes), _) => AnswerVerdict::Confirmed,
+        (Answer::No, Some(Fails), Some(Passes)) => AnswerVerdict::Contradicted,
+        (Answer::Yes | Answer::Unknown, _, Some(Passes)) => AnswerVerdict::Contradicted,
+        (Answer::Yes | Answer::Unknown, Some(Passes), Some(Fails)) => AnswerVerdict::Confirmed,
+        _ => AnswerVerdict::Undecided,
+    }
 }
 
 #[cfg(test)]
@@ -309,6 +315,32 @@ mod tests {
             line_start: Vector3::zeros(),
             line_end: Vector3::x(),
             nearest_objects: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn answers_are_judged_from_the_two_gates() {
+        use AnswerVerdict::*;
+        use Decision::{Fails, Passes, Undecided as Open};
+        let cases = [
+            (Answer::No, Some(Passes), None, Confirmed),
+            (Answer::No, Some(Fails), Some(Passes), Contradicted),
+            (Answer::No, Some(Fails), Some(Fails), Undecided),
+            (Answer::No, Some(Fails), Some(Open), Undecided),
+            (Answer::No, Some(Open), Some(Passes), Undecided),
+            (Answer::Yes, Some(Passes), Some(Passes), Contradicted),
+            (Answer::Unknown, Some(Fails), Some(Passes), Contradicted),
+            (Answer::Yes, Some(Passes), Some(Fails), Confirmed),
+            (Answer::Yes, Some(Fails), Some(Fails), Undecided),
+            (Answer::Yes, Some(Passes), Some(Open), Undecided),
+            (Answer::Yes, None, None, Undecided),
+        ];
+        for (answer, with, flipped, verdict) in cases {
+            assert_eq!(
+                judge(answer, with, flipped),
+                verdict,
+                "{answer:?} {with:?} {flipped:?}"
+            );
         }
     }
 

@@ -10,6 +10,7 @@ use crate::ValidateError;
 use akl_planner::flexibility::{planner_gains, FreedomOptions, GainOptions, Workspace};
 use akl_planner::{PlanBudget, PlanOptions, Robot};
 use akl_scene::Task;
+use akl_stats::PassRate;
 use akl_tsr::TaskSpec;
 use serde::Serialize;
 
@@ -41,16 +42,16 @@ pub struct Row {
     pub plan_success: f64,
     /// The quickest plan's execution time over those scenes (seconds).
     pub best_duration: Option<f64>,
-    /// Validation trials of the spec itself that ran (fewer than asked when interrupted).
+    /// Validation trials of the spec itself that the gate read.
     pub trials: usize,
-    /// Share of those that passed.
-    pub pass_rate: f64,
+    /// How many of those passed, with the 95 % interval.
+    pub pass_rate: PassRate,
     /// Whether its validation was interrupted (Ctrl-C) part-way.
     pub interrupted: bool,
     /// The validation verdict (`None` when interrupted: a validation cut short has none).
     pub verdict: Option<Verdict>,
-    /// What validation found superfluous (removals that passed every trial, contradicted
-    /// answers are not checked here); empty when interrupted.
+    /// What validation found superfluous (removals that pass the gate; answers are not
+    /// checked here); empty when interrupted.
     pub not_essential: Vec<String>,
 }
 
@@ -89,7 +90,7 @@ pub fn compare(
             spec,
             &GainOptions {
                 scenes: options.scenes,
-                seed: options.validate.trials.seed,
+                seed: options.validate.seed,
                 plan: PlanOptions {
                     budget: PlanBudget::from_millis(options.budget_ms, spec.keyframes.len()),
                     ..PlanOptions::default()
@@ -97,10 +98,11 @@ pub fn compare(
             },
         )?;
         let validation = validate(robot, task, spec, &options.validate, None, &|_, _| {})?;
+        let outcome = &validation.spec.outcome;
         // Raised during the validation (or just after it): its trials may be cut short, so it
         // gets no verdict.
         let interrupted = interrupt.raised();
-        if interrupted && validation.outcome.run == 0 {
+        if interrupted && outcome.run == 0 {
             return Ok(Comparison { interrupted, rows });
         }
         rows.push(Row {
@@ -111,10 +113,10 @@ pub fn compare(
             bits: workspace.bits(spec)?,
             plan_success: gains.success_rate,
             best_duration: gains.duration.map(|d| d.best),
-            trials: validation.outcome.run,
-            pass_rate: validation.outcome.pass_rate(),
+            trials: outcome.run,
+            pass_rate: outcome.pass_rate,
             interrupted,
-            verdict: (!interrupted).then_some(validation.verdict),
+            verdict: validation.verdict,
             not_essential: if interrupted {
                 Vec::new()
             } else {

@@ -1,131 +1,132 @@
 //! TSRs relaxed as far as verification allows, beyond the thesis: its keyframes keep fixed
 //! bounds (±5 mm, ±0.05 rad), while the task may allow far more (the yaw of a grasp on a square
-//! block, where on a shelf a part may go). A wider region leaves the planner more execution
-//! traces (Definition 3.2.1), which the bits of freedom count.
+//! block, where on a mat a part may go). A wider region leaves the planner more execution
+//! traces (Definition 3.2.1).
 //!
-//! **Search.** Keyframe by keyframe, axis by axis (x, y, z, roll, pitch, yaw), upper bound then
-//! lower, each bound is pushed away from the nominal pose: first to its limit
-//! ([`RelaxOptions::position_limit`], [`RelaxOptions::angle_limits`]), and if that fails, by
-//! [`RelaxOptions::depth`] steps of bisection between the last bound that passed and the
-//! first that failed. A probe runs the search trials on the spec with that axis of that
-//! keyframe confined to the slice the probe would add (from the bound already accepted to the
-//! candidate), every other bound as accepted so far: with goals drawn uniformly across the
-//! region (see [`crate::trials::verifying`]), every trial's goal then lands where the
-//! candidate is new, instead of mostly where earlier probes already tested. Slices never
-//! tested are never kept. The search is greedy: earlier axes widen first, later ones within
-//! what the earlier allowed.
+//! **Search, keyframe by keyframe.** For each keyframe, each axis (x, y, z, roll, pitch, yaw)
+//! is widened symmetrically about the nominal pose to the largest of [`RelaxOptions::levels`]
+//! (shares of the axis' limit) that passes a *screening*: up to [`RelaxOptions::screen`]
+//! trials on seeds no other probe uses, stopped at the first *excess* failure — a trial the
+//! candidate fails and the spec as it stood before the probe passes on the same seed. A
+//! failure the unrelaxed spec shares is the spec's own and is not blamed on the widening, so a
+//! spec that fails one trial in a thousand is not held back by its own rare failures, and a
+//! widening that breaks one trial in three is dropped after about three trials. Screening
+//! lets mildly harmful widenings through (20 clean trials accept a widening that fails 5 % of
+//! trials a third of the time), so what a keyframe kept is then **gated**: the deployment
+//! gate ([`akl_stats::gate`]) on fresh seeds. If it fails or is undecided, the keyframe's
+//! widening is halved and gated again, [`RelaxOptions::back_offs`] times, and dropped after
+//! that. Only a gated spec becomes the new best: whatever the search does next, and whenever
+//! it is interrupted, the spec returned has passed the gate on seeds the search never used.
 //!
-//! **Verification.** The relaxed spec then runs [`RelaxOptions::verify`] trials on seeds the
-//! search never used. If one fails, the widening is halved (every bound moved halfway back
-//! toward the spec's) and verified on the next fresh seeds, at most
-//! [`RelaxOptions::back_offs`] times; if none passes, no relaxed spec is returned. The search
-//! accepts a slice after a handful of trials, so a slice that fails one trial in twenty is often
-//! accepted, and with dozens of bounds the searched spec nearly always fails its first
-//! verification. Narrowing only the keyframe whose halving made the failed trial pass was
-//! tried and lost: a failed trial often passes after narrowing any keyframe (its goals are
-//! drawn anew), so the blame is noise, and six such rounds verified one truth of three against
-//! three of three with two rounds of halving everything (BENCHMARKS.md, "Relaxation"), since
-//! raised to four when the placements became precise (see [`RelaxOptions::default`]).
-//!
-//! **Trial count and depth.** Chosen by measurement on the three ground truths
-//! (`cargo test --release -p akl-validate --test relax relax_survey -- --ignored --nocapture`,
-//! BENCHMARKS.md "Relaxation"): see [`RelaxOptions::default`].
+//! **Gain.** The bits of execution traces (a 5 cm lattice, [`akl_planner::flexibility`]) do not
+//! see a wider turn or a millimetre, so the gain is also measured as the log-volume of every
+//! TSR: `Σ log2(new width / old width)` over its six axes, one bit for each doubling.
 
-use crate::trials::{run_trials, Outcome, Stop, Trials};
+use crate::trials::{run_gated, verifying, Outcome};
 use crate::ValidateError;
+use akl_exec::batch::{trial_seed, Batch, BatchOptions};
 use akl_exec::trial::ExecOptions;
 use akl_planner::flexibility::{FreedomOptions, Workspace};
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::{Decision, Gate, GateOptions};
 use akl_tsr::tsr::COORDINATE_NAMES;
-use akl_tsr::TaskSpec;
+use akl_tsr::{TaskSpec, Tsr};
 use serde::Serialize;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// How a spec is relaxed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RelaxOptions {
-    /// The trials every probe runs (the search seeds).
-    pub search: Trials,
-    /// The trials the relaxed spec must pass, on seeds the search does not use; a back-off
-    /// round r uses the `count` seeds from `seed + r × count`.
-    pub verify: Trials,
-    /// Bisection steps per bound once its limit has failed.
-    pub depth: usize,
+    /// Seed of the search's first probe trial (probe p screens on its own seeds after it).
+    pub seed: u64,
+    /// Seed of the first gate's trials; every gate runs on seeds after the last one's, none of
+    /// them the search's (see [`RelaxOptions::check`]).
+    pub gate_seed: u64,
+    /// Trials run in parallel.
+    pub jobs: usize,
+    /// Most screening trials of one widening.
+    pub screen: usize,
+    /// The widths tried for each axis, as shares of its limit, widest first.
+    pub levels: Vec<f64>,
     /// Farthest a position bound is pushed from the nominal pose (metres).
     pub position_limit: f64,
     /// Farthest the roll, pitch and yaw bounds are pushed from the nominal (radians).
     pub angle_limits: [f64; 3],
-    /// Times a relaxation that fails its verification is halved and verified again.
+    /// Times a keyframe's widening that fails its gate is halved and gated again.
     pub back_offs: usize,
-    /// Execution settings.
+    /// The gate every kept widening passes.
+    pub gate: GateOptions,
+    /// Execution settings; its interrupt stops the relaxation (the best gated spec is kept).
     pub exec: ExecOptions,
 }
 
 impl Default for RelaxOptions {
-    /// 10 search trials per probe and 4 bisection steps (a bound found to within 1/16 of its
-    /// range: 6 mm of position, 0.1 rad of roll or pitch, 0.2 rad of yaw), chosen by
-    /// measurement (BENCHMARKS.md, "Relaxation"); 30 verification trials on seeds from
-    /// 1,000,000; limits of 10 cm, π/2 for roll and pitch and π for yaw; four back-offs (two
-    /// verified every truth until placements went onto 4 cm mats, after which pick_place and
-    /// assembly failed every round of two and first passed at an eighth of the widening).
+    /// Screening of 20 trials; levels of the whole limit, a quarter and a sixteenth (±10 cm,
+    /// 2.5 cm, 6 mm of position; ±π/2, 0.39, 0.1 rad of roll and pitch; ±π, 0.79, 0.2 rad of
+    /// yaw); two back-offs; the deployment gate's defaults; gates on seeds from 1,000,000.
+    /// Chosen by measurement on the three ground truths (BENCHMARKS.md, "Relaxation"): each
+    /// finishes within two minutes on two cores.
     fn default() -> Self {
         RelaxOptions {
-            search: Trials {
-                count: 10,
-                seed: 0,
-                jobs: 1,
-            },
-            verify: Trials {
-                count: 30,
-                seed: 1_000_000,
-                jobs: 1,
-            },
-            depth: 4,
+            seed: 0,
+            gate_seed: 1_000_000,
+            jobs: 1,
+            screen: 20,
+            levels: vec![1.0, 0.25, 0.0625],
             position_limit: 0.10,
             angle_limits: [FRAC_PI_2, FRAC_PI_2, PI],
-            back_offs: 4,
+            back_offs: 2,
+            gate: GateOptions::default(),
             exec: ExecOptions::default(),
         }
     }
 }
 
 impl RelaxOptions {
-    /// Checks the counts, limits and that verification seeds stay clear of the search's.
-    pub fn check(&self) -> Result<(), ValidateError> {
-        self.search.check()?;
-        self.verify.check()?;
+    /// Checks the counts, limits, levels and that gate seeds stay clear of the search's.
+    pub fn check(&self, spec: &TaskSpec) -> Result<(), ValidateError> {
+        let bad = |m: &str| Err(ValidateError::Options(m.to_string()));
+        if self.jobs == 0 {
+            return bad("needs at least one job");
+        }
+        if self.screen == 0 {
+            return bad("--screen: needs at least one trial");
+        }
         let limits_ok = self.position_limit.is_finite()
             && self.position_limit > 0.0
             && self.angle_limits.iter().all(|a| a.is_finite() && *a > 0.0);
         if !limits_ok {
-            return Err(ValidateError::Options(
-                "relaxation limits must be positive and finite".into(),
-            ));
+            return bad("relaxation limits must be positive and finite");
         }
-        let span = |t: &Trials, rounds: usize| {
-            let end = t.seed.saturating_add((t.count * rounds) as u64);
-            (t.seed, end)
-        };
-        let (s0, s1) = span(&self.search, 1);
-        let (v0, v1) = span(&self.verify, self.back_offs + 1);
-        if s0 < v1 && v0 < s1 {
+        if self.levels.is_empty() || self.levels.iter().any(|l| !(*l > 0.0 && *l <= 1.0)) {
+            return bad("relaxation levels must lie in (0, 1]");
+        }
+        Gate::new(self.gate).map_err(|e| ValidateError::Options(e.to_string()))?;
+        let search_end = self
+            .seed
+            .saturating_add((self.most_probes(spec) * self.screen) as u64);
+        let gates = 1 + spec.keyframes.len() * (self.back_offs + 1);
+        let gate_end = self
+            .gate_seed
+            .saturating_add((gates * self.gate.max_trials) as u64);
+        if self.seed < gate_end && self.gate_seed < search_end {
             return Err(ValidateError::Options(format!(
-                "verification seeds {v0}..{v1} overlap the search seeds {s0}..{s1}"
+                "gate seeds {}..{gate_end} overlap the search seeds {}..{search_end}",
+                self.gate_seed, self.seed
             )));
         }
         Ok(())
     }
 
-    /// The most trials relaxing `spec` can take: its own search trials, every probe of
-    /// every bound, every verification round (early stops make it fewer).
-    pub fn most_trials(&self, spec: &TaskSpec) -> usize {
-        let probes = 1 + spec.keyframes.len() * 12 * (self.depth + 1);
-        probes * self.search.count + (self.back_offs + 1) * self.verify.count
+    /// The most probes relaxing `spec` can run: every level of every axis of every keyframe.
+    pub fn most_probes(&self, spec: &TaskSpec) -> usize {
+        spec.keyframes.len() * 6 * self.levels.len()
     }
 
-    /// How far the bound on `axis` (0–5) may be pushed from the nominal pose.
+    /// How far axis `axis` (0–5) may be widened either side of the nominal pose.
     fn limit(&self, axis: usize) -> f64 {
         if axis < 3 {
             self.position_limit
@@ -135,235 +136,320 @@ impl RelaxOptions {
     }
 }
 
-/// Which end of an interval.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Side {
-    /// The upper bound.
-    Max,
-    /// The lower bound.
-    Min,
-}
-
-impl Side {
-    fn index(self) -> usize {
-        match self {
-            Side::Min => 0,
-            Side::Max => 1,
-        }
-    }
-}
-
-/// What the search did with one bound.
+/// One widening tried.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct BoundSearch {
+pub struct Probe {
     /// The keyframe.
     pub keyframe: usize,
     /// The axis: x, y, z, roll, pitch or yaw.
     pub axis: &'static str,
-    /// Which bound.
-    pub side: Side,
-    /// The bound in the spec.
-    pub from: f64,
-    /// The bound the search kept.
-    pub to: f64,
-    /// Probes run.
-    pub probes: usize,
-    /// Trials run over those probes.
+    /// The bounds before.
+    pub from: [f64; 2],
+    /// The bounds tried.
+    pub to: [f64; 2],
+    /// Screening trials run.
     pub trials: usize,
-    /// Why the first rejected probe failed, if one was.
-    pub stopped_by: Option<String>,
+    /// Whether the widening passed its screening (and was kept for the keyframe's gate).
+    pub kept: bool,
+    /// The excess failure that rejected it, if one did.
+    pub rejected_by: Option<String>,
 }
 
-impl BoundSearch {
-    /// Whether the bound moved.
-    pub fn widened(&self) -> bool {
-        self.to != self.from
-    }
-}
-
-/// One verification of a relaxed spec on fresh seeds.
+/// One gate on fresh seeds: of the spec as given, or of a keyframe's widening.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Verification {
-    /// Share of the search's widening kept (1, then halved at each back-off).
+pub struct GateRound {
+    /// The keyframe whose widening was gated (`None`: the spec as given).
+    pub keyframe: Option<usize>,
+    /// Share of the screened widening gated (1, then halved at each back-off).
     pub kept: f64,
     /// The trials' first seed.
     pub seed: u64,
-    /// What they gave (stopped at the first failure).
+    /// The gate's decision (`None`: interrupted).
+    pub decision: Option<Decision>,
+    /// The trials it read.
     pub outcome: Outcome,
+}
+
+/// What a relaxation did, as it goes (for streamed progress).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event<'a> {
+    /// A probe's screening ended.
+    Probe(&'a Probe),
+    /// A gate decided (or was interrupted).
+    Gate(&'a GateRound),
 }
 
 /// The result of a relaxation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Relaxation {
-    /// The relaxed spec that passed its verification, or `None` when no verification passed.
+    /// The widest spec that passed the gate on fresh seeds, or `None` when no widening did.
     pub relaxed: Option<TaskSpec>,
-    /// What the search found, before verification.
-    pub searched: TaskSpec,
-    /// Every bound searched, in order.
-    pub bounds: Vec<BoundSearch>,
-    /// Bits of freedom of the spec.
+    /// Every probe, in order.
+    pub probes: Vec<Probe>,
+    /// Every gate, in order.
+    pub gates: Vec<GateRound>,
+    /// TSR log-volume gained per keyframe by the relaxed spec (bits, see the module docs).
+    pub volume_gain: Vec<f64>,
+    /// Bits of execution traces of the spec.
     pub bits_before: Option<f64>,
-    /// Bits of freedom of the relaxed spec (of the searched one when none was verified).
+    /// Bits of execution traces of the relaxed spec (the spec's when none was gated).
     pub bits_after: Option<f64>,
-    /// Every verification round.
-    pub verifications: Vec<Verification>,
-    /// Trials run in all (search and verification).
+    /// Trials run in all (screening and gates).
     pub trials: usize,
+    /// Whether it was interrupted (Ctrl-C): `relaxed` is the best gated spec so far.
+    pub interrupted: bool,
 }
 
 impl Relaxation {
-    /// Bits of freedom gained, when both counts have traces.
+    /// Bits of execution traces gained, when both counts have traces.
     pub fn bits_gained(&self) -> Option<f64> {
         Some(self.bits_after? - self.bits_before?)
     }
+
+    /// TSR log-volume gained over every keyframe (bits).
+    pub fn volume_gained(&self) -> f64 {
+        self.volume_gain.iter().sum()
+    }
 }
 
-/// `spec` with keyframe `k`'s `axis` confined to `[a, b]` (in either order).
-fn confined(spec: &TaskSpec, k: usize, axis: usize, a: f64, b: f64) -> TaskSpec {
-    let mut out = spec.clone();
-    out.keyframes[k].tsr.bw.0[axis] = [a.min(b), a.max(b)];
-    out
+/// `Σ log2(width in to / width in from)` over the six axes: one bit per doubling of a width
+/// (an axis of zero width in `from` counts nothing).
+pub fn volume_gain_bits(from: &Tsr, to: &Tsr) -> f64 {
+    from.bw
+        .0
+        .iter()
+        .zip(to.bw.0)
+        .filter(|([lo, hi], _)| hi > lo)
+        .map(|([lo, hi], [lo2, hi2])| ((hi2 - lo2) / (hi - lo)).log2())
+        .sum()
 }
 
-/// `from` with every bound moved the share `kept` of the way to `to`'s.
-fn blend(from: &TaskSpec, to: &TaskSpec, kept: f64) -> TaskSpec {
-    let mut out = to.clone();
-    for (o, f) in out.keyframes.iter_mut().zip(&from.keyframes) {
-        for (bo, bf) in o.tsr.bw.0.iter_mut().zip(f.tsr.bw.0) {
-            for (v, v0) in bo.iter_mut().zip(bf) {
-                *v = v0 + kept * (*v - v0);
-            }
+/// `from` with keyframe `k`'s bounds moved the share `kept` of the way to `to`'s.
+fn blend_keyframe(from: &TaskSpec, to: &TaskSpec, k: usize, kept: f64) -> TaskSpec {
+    let mut out = from.clone();
+    for (o, t) in out.keyframes[k]
+        .tsr
+        .bw
+        .0
+        .iter_mut()
+        .zip(to.keyframes[k].tsr.bw.0)
+    {
+        for (v, v1) in o.iter_mut().zip(t) {
+            *v += kept * (v1 - *v);
         }
     }
     out
 }
 
-/// Relaxes `spec` on `task`; `progress` is called after every probe and verification with
-/// the trials run so far and an upper bound of the total.
+/// Whether keyframe `k` has the same bounds in both specs.
+fn same_keyframe(a: &TaskSpec, b: &TaskSpec, k: usize) -> bool {
+    a.keyframes[k].tsr.bw == b.keyframes[k].tsr.bw
+}
+
+/// Relaxes `spec` on `task`; `report` is called with each probe and gate as it ends.
 pub fn relax(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
     options: &RelaxOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    report: &(dyn Fn(Event) + Sync),
 ) -> Result<Relaxation, ValidateError> {
-    options.check()?;
+    options.check(spec)?;
+    let gate = Gate::new(options.gate).map_err(|e| ValidateError::Options(e.to_string()))?;
     let workspace = Workspace::new(robot, task, &FreedomOptions::default())?;
-    let bits_before = workspace.bits(spec)?;
-    let bounds_count = spec.keyframes.len() * 12;
-    let upper = options.most_trials(spec);
-    let trials = Cell::new(0);
-    let probe = |candidate: &TaskSpec, on: &Trials| -> Result<Outcome, ValidateError> {
-        let outcome = run_trials(
+    let exec = verifying(&options.exec);
+    let interrupted = || exec.interrupt.raised();
+    let trials = Cell::new(0usize);
+    // Whether the spec a probe started from passed a seed: run once per (spec, seed).
+    let earlier = RefCell::new(HashMap::<(String, u64), bool>::new());
+    let passes_on = |candidate: &TaskSpec, seed: u64| -> Result<bool, ValidateError> {
+        let key = (candidate.to_json(), seed);
+        if let Some(p) = earlier.borrow().get(&key) {
+            return Ok(*p);
+        }
+        let batch = Batch::new(
             robot,
             task,
             candidate,
-            &options.exec,
-            on,
-            Stop::AtFirstFailure,
+            &exec,
+            BatchOptions {
+                trials: 1,
+                randomize: true,
+                seed,
+                jobs: 1,
+            },
         )?;
-        trials.set(trials.get() + outcome.run);
-        progress(trials.get(), upper);
-        Ok(outcome)
+        let passed = batch.run(&|_| {})?.passed == 1;
+        trials.set(trials.get() + 1);
+        earlier.borrow_mut().insert(key, passed);
+        Ok(passed)
     };
-    let own = probe(spec, &options.search)?;
-    if !own.all_passed() {
-        return Err(ValidateError::SpecFails(
-            own.first_failure_text().unwrap_or_default(),
-        ));
+    let mut next_seed = options.seed;
+    // Screens `candidate` against `base`: (trials run, the excess failure if one).
+    let mut screen =
+        |candidate: &TaskSpec, base: &TaskSpec| -> Result<(usize, Option<String>), ValidateError> {
+            let first = next_seed;
+            next_seed = next_seed.saturating_add(options.screen as u64);
+            let mut run = 0;
+            while run < options.screen && !interrupted() {
+                let count = options.jobs.min(options.screen - run);
+                let batch = Batch::new(
+                    robot,
+                    task,
+                    candidate,
+                    &exec,
+                    BatchOptions {
+                        trials: count,
+                        randomize: true,
+                        seed: trial_seed(first, run),
+                        jobs: count,
+                    },
+                )?;
+                let result = batch.run(&|_| {})?;
+                trials.set(trials.get() + result.trials);
+                for t in &result.reports {
+                    run += 1;
+                    if !t.passed && passes_on(base, t.seed)? {
+                        let why = t.root().map_or(String::new(), |f| {
+                            format!("{} (seed {}): {}", f.cause, t.seed, f.detail)
+                        });
+                        return Ok((run, Some(why)));
+                    }
+                }
+            }
+            Ok((run, None))
+        };
+    let mut gate_seed = options.gate_seed;
+    let mut gate_round =
+        |candidate: &TaskSpec, k: Option<usize>, kept: f64| -> Result<GateRound, ValidateError> {
+            let seed = gate_seed;
+            gate_seed = gate_seed.saturating_add(gate.options().max_trials as u64);
+            let gated = run_gated(
+                robot,
+                task,
+                candidate,
+                &options.exec,
+                &gate,
+                seed,
+                options.jobs,
+                false,
+                &|_| {},
+            )?;
+            trials.set(trials.get() + gated.outcome.run);
+            Ok(GateRound {
+                keyframe: k,
+                kept,
+                seed,
+                decision: gated.decision,
+                outcome: gated.outcome,
+            })
+        };
+
+    // The spec itself must pass the gate: widenings are judged against it.
+    let own = gate_round(spec, None, 1.0)?;
+    report(Event::Gate(&own));
+    match own.decision {
+        // Interrupted during its gate: nothing was gated, the search does not start.
+        Some(Decision::Passes) | None => {}
+        Some(d) => {
+            return Err(ValidateError::SpecFails(format!(
+                "the gate {} it ({}/{} passed){}",
+                match d {
+                    Decision::Fails => "fails",
+                    _ => "cannot decide on",
+                },
+                own.outcome.passed,
+                own.outcome.run,
+                own.outcome
+                    .first_failure_text()
+                    .map_or(String::new(), |f| format!("; first failure: {f}"))
+            )))
+        }
     }
-    let mut relaxed = spec.clone();
-    let mut bounds = Vec::with_capacity(bounds_count);
-    for k in 0..spec.keyframes.len() {
+    let mut best = spec.clone();
+    let mut gated_any = false;
+    let mut probes = Vec::new();
+    let mut gates = vec![own];
+    let searched = if interrupted() {
+        0
+    } else {
+        spec.keyframes.len()
+    };
+    'keyframes: for k in 0..searched {
+        let mut screened = best.clone();
         for (axis, name) in COORDINATE_NAMES.iter().enumerate() {
-            for side in [Side::Max, Side::Min] {
-                let from = relaxed.keyframes[k].tsr.bw.0[axis][side.index()];
-                let limit = match side {
-                    Side::Max => options.limit(axis),
-                    Side::Min => -options.limit(axis),
-                };
-                let mut search = BoundSearch {
+            let from = screened.keyframes[k].tsr.bw.0[axis];
+            for level in &options.levels {
+                if interrupted() {
+                    break 'keyframes;
+                }
+                let w = level * options.limit(axis);
+                let to = [from[0].min(-w), from[1].max(w)];
+                if to == from {
+                    continue;
+                }
+                let mut candidate = screened.clone();
+                candidate.keyframes[k].tsr.bw.0[axis] = to;
+                let (run, rejected_by) = screen(&candidate, &screened)?;
+                let kept = rejected_by.is_none() && run == options.screen;
+                let probe = Probe {
                     keyframe: k,
                     axis: name,
-                    side,
                     from,
-                    to: from,
-                    probes: 0,
-                    trials: 0,
-                    stopped_by: None,
+                    to,
+                    trials: run,
+                    kept,
+                    rejected_by,
                 };
-                let room = match side {
-                    Side::Max => limit > from,
-                    Side::Min => limit < from,
-                };
-                if room {
-                    let before = trials.get();
-                    let mut good = from;
-                    let mut bad = limit;
-                    let mut candidate = limit;
-                    for step in 0..=options.depth {
-                        let slice = confined(&relaxed, k, axis, good, candidate);
-                        let outcome = probe(&slice, &options.search)?;
-                        search.probes += 1;
-                        if outcome.all_passed() {
-                            good = candidate;
-                            if step == 0 {
-                                break;
-                            }
-                        } else {
-                            bad = candidate;
-                            if search.stopped_by.is_none() {
-                                search.stopped_by = outcome.first_failure_text();
-                            }
-                        }
-                        candidate = 0.5 * (good + bad);
-                    }
-                    relaxed.keyframes[k].tsr.bw.0[axis][side.index()] = good;
-                    search.to = good;
-                    search.trials = trials.get() - before;
+                report(Event::Probe(&probe));
+                probes.push(probe);
+                if kept {
+                    screened = candidate;
+                    break;
                 }
-                bounds.push(search);
             }
         }
-    }
-    let mut verifications = Vec::new();
-    let mut verified = None;
-    let mut kept = 1.0;
-    for round in 0..=options.back_offs {
-        let candidate = blend(spec, &relaxed, kept);
-        let fresh = Trials {
-            seed: options
-                .verify
-                .seed
-                .saturating_add((round * options.verify.count) as u64),
-            ..options.verify
-        };
-        let outcome = probe(&candidate, &fresh)?;
-        let passed = outcome.all_passed();
-        verifications.push(Verification {
-            kept,
-            seed: fresh.seed,
-            outcome,
-        });
-        if passed {
-            verified = Some(candidate);
-            break;
+        if same_keyframe(&screened, &best, k) {
+            continue;
         }
-        kept *= 0.5;
+        let mut kept = 1.0;
+        for _ in 0..=options.back_offs {
+            if interrupted() {
+                break 'keyframes;
+            }
+            let candidate = blend_keyframe(&best, &screened, k, kept);
+            let round = gate_round(&candidate, Some(k), kept)?;
+            report(Event::Gate(&round));
+            let passed = round.decision == Some(Decision::Passes);
+            gates.push(round);
+            if passed {
+                best = candidate;
+                gated_any = true;
+                break;
+            }
+            kept *= 0.5;
+        }
     }
-    let bits_after = workspace.bits(verified.as_ref().unwrap_or(&relaxed))?;
-    if let Some(v) = verified.as_mut() {
-        v.method = format!("{}+relaxed", spec.method);
-    }
+    let relaxed = gated_any.then(|| {
+        let mut r = best.clone();
+        r.method = format!("{}+relaxed", spec.method);
+        r
+    });
+    let volume_gain = spec
+        .keyframes
+        .iter()
+        .zip(&best.keyframes)
+        .map(|(a, b)| volume_gain_bits(&a.tsr, &b.tsr))
+        .collect();
     Ok(Relaxation {
-        relaxed: verified,
-        searched: relaxed,
-        bounds,
-        bits_before,
-        bits_after,
-        verifications,
+        bits_before: workspace.bits(spec)?,
+        bits_after: workspace.bits(&best)?,
+        relaxed,
+        probes,
+        gates,
+        volume_gain,
         trials: trials.get(),
+        interrupted: interrupted(),
     })
 }
 
@@ -373,30 +459,42 @@ mod tests {
     use akl_scene::builtin;
 
     #[test]
-    fn a_blend_moves_every_bound_part_of_the_way() {
+    fn a_blend_moves_one_keyframe_part_of_the_way() {
         let task = builtin::task("pick_place").unwrap().unwrap();
         let spec = task.truth.clone().unwrap();
         let mut wide = spec.clone();
         wide.keyframes[1].tsr.bw.0[0] = [-0.045, 0.085];
-        let half = blend(&spec, &wide, 0.5);
+        wide.keyframes[2].tsr.bw.0[0] = [-0.045, 0.085];
+        let half = blend_keyframe(&spec, &wide, 1, 0.5);
         let [lo, hi] = half.keyframes[1].tsr.bw.0[0];
         assert!((lo + 0.025).abs() < 1e-12 && (hi - 0.045).abs() < 1e-12);
-        assert_eq!(blend(&spec, &wide, 1.0), wide);
-        assert_eq!(blend(&spec, &wide, 0.0), spec);
-        let slice = confined(&spec, 2, 5, 0.3, 0.05);
-        assert_eq!(slice.keyframes[2].tsr.bw.0[5], [0.05, 0.3]);
+        assert_eq!(half.keyframes[2], spec.keyframes[2]);
+        assert_eq!(blend_keyframe(&spec, &wide, 1, 0.0), spec);
     }
 
     #[test]
-    fn verification_seeds_must_stay_clear_of_the_search() {
+    fn a_doubled_width_is_one_bit() {
+        let task = builtin::task("pick_place").unwrap().unwrap();
+        let tsr = task.truth.clone().unwrap().keyframes[0].tsr.clone();
+        let mut wider = tsr.clone();
+        let [lo, hi] = wider.bw.0[5];
+        wider.bw.0[5] = [2.0 * lo, 2.0 * hi];
+        assert!((volume_gain_bits(&tsr, &wider) - 1.0).abs() < 1e-12);
+        wider.bw.0[0] = [4.0 * wider.bw.0[0][0], 4.0 * wider.bw.0[0][1]];
+        assert!((volume_gain_bits(&tsr, &wider) - 3.0).abs() < 1e-12);
+        assert_eq!(volume_gain_bits(&tsr, &tsr), 0.0);
+    }
+
+    #[test]
+    fn gate_seeds_must_stay_clear_of_the_search() {
+        let task = builtin::task("pick_place").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
         let mut options = RelaxOptions::default();
-        assert!(options.check().is_ok());
-        options.verify.seed = 5;
-        let e = options.check().unwrap_err().to_string();
+        assert!(options.check(&spec).is_ok());
+        options.gate_seed = 5;
+        let e = options.check(&spec).unwrap_err().to_string();
         assert!(e.contains("overlap"), "{e}");
-        options.verify.seed = 10;
-        assert!(options.check().is_ok());
-        options.search.seed = 95;
-        assert!(options.check().is_err(), "back-off rounds reach seed 100");
+        options.levels = vec![1.5];
+        assert!(options.check(&spec).is_err());
     }
 }

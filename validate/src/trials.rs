@@ -1,13 +1,15 @@
-//! Randomized trials as validation runs them: goals drawn across every TSR, and the run cut
-//! short at the first failed trial when all that matters is whether every trial passes.
+//! Randomized trials as validation runs them: goals drawn across every TSR, either a fixed
+//! number of them ([`run_trials`]) or as many as the deployment gate needs to decide
+//! ([`run_gated`]).
 
 use akl_exec::batch::{trial_seed, Batch, BatchOptions};
 use akl_exec::error::ExecError;
-use akl_exec::report::{BatchReport, Cause};
+use akl_exec::report::{BatchReport, Cause, TrialReport};
 use akl_exec::trial::ExecOptions;
 use akl_planner::goal::GoalStrategy;
 use akl_planner::{PlanBudget, Robot};
 use akl_scene::Task;
+use akl_stats::{Decision, Gate, PassRate};
 use akl_tsr::TaskSpec;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -42,15 +44,6 @@ impl Trials {
     }
 }
 
-/// Whether a run goes on after a failed trial.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stop {
-    /// Stop once a trial has failed: the question is only whether every trial passes.
-    AtFirstFailure,
-    /// Run every trial: the pass rate is wanted.
-    Never,
-}
-
 /// The first failed trial of a run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrialFailure {
@@ -63,40 +56,40 @@ pub struct TrialFailure {
 }
 
 /// What a run of trials gave.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outcome {
-    /// Trials run (fewer than asked when the run stopped at a failure).
+    /// Trials run (fewer than asked when the run stopped early).
     pub run: usize,
     /// Trials that passed.
     pub passed: usize,
+    /// The pass rate with its 95 % confidence interval.
+    pub pass_rate: PassRate,
     /// For each cause, the failed trials it was the root cause of (these add up to the
     /// failed trials).
     pub failures: BTreeMap<Cause, usize>,
     /// The first trial that failed, if any.
     pub first_failure: Option<TrialFailure>,
-    /// The seeds of the trials that failed.
+    /// The seeds of the trials that failed, in order.
     pub failed_seeds: Vec<u64>,
+}
+
+impl Default for Outcome {
+    fn default() -> Self {
+        Outcome {
+            run: 0,
+            passed: 0,
+            pass_rate: PassRate::new(0, 0),
+            failures: BTreeMap::new(),
+            first_failure: None,
+            failed_seeds: Vec::new(),
+        }
+    }
 }
 
 impl Outcome {
     /// Whether trials ran and every one passed.
     pub fn all_passed(&self) -> bool {
         self.run > 0 && self.passed == self.run
-    }
-
-    /// The seeds of `trials` that did not fail here (all of them that ran and passed, and any
-    /// the run stopped before).
-    pub fn passed_seeds(&self, trials: &Trials) -> Vec<u64> {
-        trials
-            .seeds()
-            .into_iter()
-            .filter(|s| !self.failed_seeds.contains(s))
-            .collect()
-    }
-
-    /// Share of the trials run that passed.
-    pub fn pass_rate(&self) -> f64 {
-        self.passed as f64 / self.run.max(1) as f64
     }
 
     /// The first failure in words (`cause (seed S): detail`), if any.
@@ -106,22 +99,28 @@ impl Outcome {
             .map(|f| format!("{} (seed {}): {}", f.cause, f.seed, f.detail))
     }
 
-    fn add(&mut self, report: &BatchReport) {
-        self.run += report.trials;
-        self.passed += report.passed;
-        for (cause, n) in &report.failures {
-            *self.failures.entry(*cause).or_default() += n;
+    /// Counts one more trial.
+    fn record(&mut self, trial: &TrialReport) {
+        self.run += 1;
+        if trial.passed {
+            self.passed += 1;
+        } else {
+            self.failed_seeds.push(trial.seed);
+            if let Some(root) = trial.root() {
+                *self.failures.entry(root.cause).or_default() += 1;
+                self.first_failure.get_or_insert_with(|| TrialFailure {
+                    seed: trial.seed,
+                    cause: root.cause,
+                    detail: root.detail.clone(),
+                });
+            }
         }
-        self.failed_seeds
-            .extend(report.reports.iter().filter(|r| !r.passed).map(|r| r.seed));
-        if self.first_failure.is_none() {
-            self.first_failure = report.reports.iter().find(|r| !r.passed).and_then(|r| {
-                r.root().map(|f| TrialFailure {
-                    seed: r.seed,
-                    cause: f.cause,
-                    detail: f.detail.clone(),
-                })
-            });
+        self.pass_rate = PassRate::new(self.passed, self.run);
+    }
+
+    fn add(&mut self, report: &BatchReport) {
+        for trial in &report.reports {
+            self.record(trial);
         }
     }
 }
@@ -150,74 +149,116 @@ pub fn verifying(exec: &ExecOptions) -> ExecOptions {
     options
 }
 
-/// Runs `spec`'s randomized `trials` on `task`, planned as [`verifying`] plans them; with
-/// [`Stop::AtFirstFailure`] the trials run `jobs` at a time and the run ends with the batch
-/// in which a trial failed. The same seeds give the same outcome whatever `jobs` is, up to
-/// where an early stop falls.
+/// Runs `spec`'s randomized `trials` on `task`, planned as [`verifying`] plans them, every one
+/// of them (`jobs` at a time; the same seeds give the same outcome whatever `jobs` is).
 pub fn run_trials(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
     exec: &ExecOptions,
     trials: &Trials,
-    stop: Stop,
 ) -> Result<Outcome, ExecError> {
     trials.check()?;
-    run_seeds(robot, task, spec, exec, &trials.seeds(), trials.jobs, stop)
+    let exec = verifying(exec);
+    let batch = Batch::new(
+        robot,
+        task,
+        spec,
+        &exec,
+        BatchOptions {
+            trials: trials.count,
+            randomize: true,
+            seed: trials.seed,
+            jobs: trials.jobs.min(trials.count),
+        },
+    )?;
+    let mut outcome = Outcome::default();
+    outcome.add(&batch.run(&|_| {})?);
+    Ok(outcome)
 }
 
-/// Runs the trials of the given seeds (as [`run_trials`] does), `jobs` at a time.
-pub fn run_seeds(
+/// A spec's trials judged by the deployment gate ([`akl_stats::gate`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Gated {
+    /// The gate's decision; `None` when the run was interrupted (Ctrl-C) before it decided.
+    pub decision: Option<Decision>,
+    /// The trials the gate read, in seed order up to its decision (trials a batch ran past
+    /// it are left out, so the decision and these counts do not depend on `jobs`).
+    pub outcome: Outcome,
+    /// Those trials' reports, when asked for (see [`run_gated`]).
+    #[serde(skip)]
+    pub reports: Vec<TrialReport>,
+}
+
+/// Largest batch the gate runs at once (per job): later batches grow to it, so a spec that
+/// fails at once costs a trial or two per core, and one that passes runs in few batches.
+const LARGEST_BATCH_PER_JOB: usize = 32;
+
+/// Runs `spec`'s trials from seed `seed` (planned as [`verifying`] plans them), `jobs` at a
+/// time in batches that double in size, and feeds them to `gate` in seed order until it
+/// decides. Keeps the trials' reports when `keep_reports`; `progress` is called after each
+/// batch with the trials judged so far. Stops, without a decision, once `exec.interrupt` is
+/// raised.
+#[allow(clippy::too_many_arguments)]
+pub fn run_gated(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
     exec: &ExecOptions,
-    seeds: &[u64],
+    gate: &Gate,
+    seed: u64,
     jobs: usize,
-    stop: Stop,
-) -> Result<Outcome, ExecError> {
+    keep_reports: bool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Gated, ExecError> {
+    if jobs == 0 {
+        return Err(ExecError::Options("needs at least one job".into()));
+    }
     let exec = verifying(exec);
-    let chunk = match stop {
-        Stop::AtFirstFailure => jobs.max(1),
-        Stop::Never => seeds.len().max(1),
+    let max = gate.options().max_trials;
+    let mut gated = Gated {
+        decision: None,
+        outcome: Outcome::default(),
+        reports: Vec::new(),
     };
-    let mut outcome = Outcome::default();
-    for group in consecutive(seeds) {
-        for part in group.chunks(chunk) {
-            let batch = Batch::new(
-                robot,
-                task,
-                spec,
-                &exec,
-                BatchOptions {
-                    trials: part.len(),
-                    randomize: true,
-                    seed: part[0],
-                    jobs: jobs.clamp(1, part.len()),
-                },
-            )?;
-            outcome.add(&batch.run(&|_| {})?);
-            if stop == Stop::AtFirstFailure && !outcome.all_passed() {
-                return Ok(outcome);
+    let mut failed = 0;
+    let mut size = jobs;
+    while gated.decision.is_none() && gated.outcome.run < max {
+        if exec.interrupt.raised() {
+            return Ok(gated);
+        }
+        let count = size.min(max - gated.outcome.run);
+        let batch = Batch::new(
+            robot,
+            task,
+            spec,
+            &exec,
+            BatchOptions {
+                trials: count,
+                randomize: true,
+                seed: trial_seed(seed, gated.outcome.run),
+                jobs: jobs.min(count),
+            },
+        )?;
+        let report = batch.run(&|_| {})?;
+        for trial in report.reports {
+            gated.outcome.record(&trial);
+            failed += usize::from(!trial.passed);
+            if keep_reports {
+                gated.reports.push(trial);
+            }
+            gated.decision = gate.decide(gated.outcome.run, failed);
+            if gated.decision.is_some() {
+                break;
             }
         }
-    }
-    Ok(outcome)
-}
-
-/// `seeds` split into runs of consecutive seeds (a batch runs consecutive seeds).
-fn consecutive(seeds: &[u64]) -> Vec<&[u64]> {
-    let mut runs = Vec::new();
-    let mut start = 0;
-    for i in 1..=seeds.len() {
-        if i == seeds.len() || seeds[i] != seeds[i - 1].wrapping_add(1) {
-            if i > start {
-                runs.push(&seeds[start..i]);
-            }
-            start = i;
+        progress(gated.outcome.run);
+        if report.interrupted {
+            return Ok(gated);
         }
+        size = (2 * size).min(LARGEST_BATCH_PER_JOB * jobs);
     }
-    runs
+    Ok(gated)
 }
 
 #[cfg(test)]
@@ -226,7 +267,7 @@ mod tests {
     use akl_scene::builtin;
 
     #[test]
-    fn a_run_stops_at_the_first_failure_only_when_asked() {
+    fn a_failing_spec_is_rejected_by_the_gate_at_its_first_trial_whatever_the_jobs() {
         let robot = Robot::panda().unwrap();
         let task = builtin::task("pick_place").unwrap().unwrap();
         let mut wrong = task.truth.clone().unwrap();
@@ -238,17 +279,21 @@ mod tests {
             seed: 0,
             jobs: 1,
         };
-        let all = run_trials(&robot, &task, &wrong, &exec, &trials, Stop::Never).unwrap();
+        let all = run_trials(&robot, &task, &wrong, &exec, &trials).unwrap();
         assert_eq!((all.run, all.passed), (4, 0));
-        assert_eq!(all.failures.values().copied().max(), Some(4));
+        assert_eq!(all.failures.values().sum::<usize>(), 4);
         let first = all.first_failure.clone().unwrap();
         assert_eq!(first.seed, 0);
         assert_eq!(all.failed_seeds, vec![0, 1, 2, 3]);
-        let short =
-            run_trials(&robot, &task, &wrong, &exec, &trials, Stop::AtFirstFailure).unwrap();
-        assert_eq!((short.run, short.passed), (1, 0));
-        assert_eq!(short.first_failure, Some(first));
-        assert!(!short.all_passed());
+        assert!(all.pass_rate.upper < 0.61, "{:?}", all.pass_rate);
+        let gate = Gate::new(akl_stats::GateOptions::default()).unwrap();
+        for jobs in [1, 2] {
+            let gated =
+                run_gated(&robot, &task, &wrong, &exec, &gate, 0, jobs, true, &|_| {}).unwrap();
+            assert_eq!(gated.decision, Some(Decision::Fails));
+            assert_eq!((gated.outcome.run, gated.reports.len()), (1, 1));
+            assert_eq!(gated.outcome.first_failure, Some(first.clone()));
+        }
     }
 
     #[test]
@@ -267,12 +312,7 @@ mod tests {
     }
 
     #[test]
-    fn seeds_split_into_consecutive_runs() {
-        assert_eq!(
-            consecutive(&[3, 4, 5, 9, 10, 12]),
-            vec![&[3, 4, 5][..], &[9, 10], &[12]]
-        );
-        assert!(consecutive(&[]).is_empty());
+    fn trials_run_on_consecutive_seeds() {
         let trials = Trials {
             count: 3,
             seed: 7,

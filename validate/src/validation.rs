@@ -1,38 +1,57 @@
-//! The deployment gate: a spec passes only if it passes its randomized trials, every keyframe
-//! and line of it is essential ([`crate::ablation`]), and, given the demonstration it was
-//! learned from, the simulation contradicts none of the teacher's answers
-//! ([`crate::answers`]).
+//! The deployment gate: a spec passes only if its trials pass the sequential gate
+//! ([`akl_stats::gate`]: it succeeds with probability at least `P` at confidence `C`), every
+//! keyframe and line of it is essential ([`crate::ablation`], the same gate on the spec without
+//! each), and, given the demonstration it was learned from, the simulation contradicts none of
+//! the teacher's answers ([`crate::answers`]).
 
-use crate::ablation::{ablate, Ablation};
+use crate::ablation::{ablate, Ablation, Necessity};
 use crate::answers::{check_answers, AnswerCheck, Answers, DemoSource};
-use crate::trials::{run_trials, Outcome, Stop, Trials};
+use crate::trials::{run_gated, Gated};
 use crate::ValidateError;
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::{Decision, Gate, GateOptions};
 use akl_tsr::TaskSpec;
 use serde::Serialize;
 
 /// How a spec is validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ValidateOptions {
-    /// The trials the spec and every removal run on.
-    pub trials: Trials,
+    /// Seed of the first trial (trial i places the objects and plans with seed + i).
+    pub seed: u64,
+    /// Trials run in parallel (at least 1).
+    pub jobs: usize,
+    /// What the gate asks, and its most trials.
+    pub gate: GateOptions,
     /// Execution settings (the planner's goals are drawn across the TSRs whatever they say,
-    /// see [`crate::trials::verifying`]).
+    /// see [`crate::trials::verifying`]); its interrupt stops the validation.
     pub exec: ExecOptions,
+}
+
+/// Which stage of a validation is running, for progress reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The spec's own trials.
+    Spec,
+    /// The spec without one keyframe or line (index among the removals).
+    Removal(usize),
+    /// One flipped answer (index among the answers).
+    Answer(usize),
 }
 
 /// The gate's answer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
-    /// Every trial passed and nothing in the spec is superfluous: deploy.
+    /// The spec passes the gate and nothing in it is superfluous: deploy.
     Passes,
-    /// Every trial passed, but a removal passed too, or an answer is contradicted.
+    /// The spec passes the gate, but a removal passes it too, or an answer is contradicted.
     NotMinimal,
-    /// Some trial failed.
+    /// The spec fails the gate.
     Fails,
+    /// The gate could not decide within its trials.
+    Undecided,
 }
 
 impl Verdict {
@@ -42,6 +61,7 @@ impl Verdict {
             Verdict::Passes => "passes, minimal",
             Verdict::NotMinimal => "not minimal",
             Verdict::Fails => "fails",
+            Verdict::Undecided => "undecided",
         }
     }
 }
@@ -49,22 +69,28 @@ impl Verdict {
 /// Everything a validation found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Validation {
-    /// The trials run.
-    pub trials: Trials,
-    /// The spec's own trials (every one run).
-    pub outcome: Outcome,
-    /// The spec without each keyframe and each line.
+    /// Seed of the first trial.
+    pub seed: u64,
+    /// What the gate asked.
+    pub gate: GateOptions,
+    /// The spec's own trials and the gate's decision on them.
+    pub spec: Gated,
+    /// The spec without each keyframe and each line (none when the spec does not pass).
     pub removals: Vec<Ablation>,
-    /// The demonstration's answers, when it was given.
+    /// The demonstration's answers, when it was given (and the gate decided on the spec).
     pub answers: Option<Answers>,
-    /// The verdict.
-    pub verdict: Verdict,
+    /// The verdict; `None` when the validation was interrupted before it was reached.
+    pub verdict: Option<Verdict>,
+    /// Whether it was interrupted (Ctrl-C): what ran is kept, what did not is missing.
+    pub interrupted: bool,
 }
 
 impl Validation {
-    /// The removals that passed every trial.
+    /// The removals that pass the gate.
     pub fn not_essential(&self) -> impl Iterator<Item = &Ablation> {
-        self.removals.iter().filter(|a| !a.essential)
+        self.removals
+            .iter()
+            .filter(|a| a.essential == Necessity::NotEssential)
     }
 
     /// The answers the simulation contradicts.
@@ -73,65 +99,68 @@ impl Validation {
     }
 }
 
-/// Validates `spec` on `task`; `progress` is called after each check (the spec's trials, each
-/// removal, each answer) with (done, total).
+/// Validates `spec` on `task`; `progress` is called as trials finish with the stage and the
+/// trials it has judged. The spec's own trial reports are kept (for `--report`).
 pub fn validate(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
     options: &ValidateOptions,
     demo: Option<DemoSource>,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &(dyn Fn(Stage, usize) + Sync),
 ) -> Result<Validation, ValidateError> {
-    let answers_count = demo.map_or(0, |d| crate::answers::recorded_answers(d.demo).len());
-    let removal_count = crate::ablation::removals(spec).len();
-    let total = 1 + removal_count + answers_count;
-    let outcome = run_trials(
-        robot,
-        task,
-        spec,
-        &options.exec,
-        &options.trials,
-        Stop::Never,
-    )?;
-    progress(1, total);
-    let removals = ablate(
-        robot,
-        task,
-        spec,
-        &outcome,
-        &options.exec,
-        &options.trials,
-        &|_, done, _| progress(1 + done, total),
-    )?;
-    let answers = match demo {
-        Some(d) => Some(check_answers(
-            robot,
-            task,
-            d,
-            spec,
-            &outcome,
-            &options.exec,
-            &options.trials,
-            &|done, _| progress(1 + removal_count + done, total),
-        )?),
-        None => None,
-    };
+    let gate = Gate::new(options.gate).map_err(|e| ValidateError::Options(e.to_string()))?;
+    let (seed, jobs, exec) = (options.seed, options.jobs, &options.exec);
+    let interrupted = || exec.interrupt.raised();
+    let spec_gated = run_gated(robot, task, spec, exec, &gate, seed, jobs, true, &|n| {
+        progress(Stage::Spec, n)
+    })?;
     let mut validation = Validation {
-        trials: options.trials,
-        outcome,
-        removals,
-        answers,
-        verdict: Verdict::Passes,
+        seed,
+        gate: options.gate,
+        spec: spec_gated,
+        removals: Vec::new(),
+        answers: None,
+        verdict: None,
+        interrupted: false,
     };
-    validation.verdict = if !validation.outcome.all_passed() {
-        Verdict::Fails
-    } else if validation.not_essential().next().is_some()
-        || validation.contradicted().next().is_some()
-    {
-        Verdict::NotMinimal
-    } else {
-        Verdict::Passes
+    let decided = validation.spec.decision;
+    // Minimality matters only for a spec that could be deployed.
+    if decided == Some(Decision::Passes) {
+        validation.removals = ablate(robot, task, spec, exec, &gate, seed, jobs, &|_, done, _| {
+            progress(Stage::Removal(done), 0)
+        })?;
+    }
+    // The answers matter most when the spec fails: a wrong "no" is a reason it does.
+    if let (Some(d), Some(_)) = (demo, decided) {
+        if !interrupted() {
+            validation.answers = Some(check_answers(
+                robot,
+                task,
+                d,
+                spec,
+                &validation.spec,
+                exec,
+                &gate,
+                seed,
+                jobs,
+                &|done, _| progress(Stage::Answer(done), 0),
+            )?);
+        }
+    }
+    validation.interrupted = interrupted();
+    validation.verdict = match decided {
+        _ if validation.interrupted => None,
+        None => None,
+        Some(Decision::Fails) => Some(Verdict::Fails),
+        Some(Decision::Undecided) => Some(Verdict::Undecided),
+        Some(Decision::Passes)
+            if validation.not_essential().next().is_some()
+                || validation.contradicted().next().is_some() =>
+        {
+            Some(Verdict::NotMinimal)
+        }
+        Some(Decision::Passes) => Some(Verdict::Passes),
     };
     Ok(validation)
 }

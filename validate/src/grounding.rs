@@ -4,24 +4,33 @@
 //!
 //! For every keyframe and every other object (and the world), the keyframe is re-grounded on
 //! that object with its offset recomputed so that, in the nominal execution, its world pose is
-//! unchanged; the re-grounded spec is executed on randomized trials. The alternative is
-//! - **distinguished** when it fails at least [`GroundingOptions::share`] of them;
+//! unchanged; the re-grounded spec is then judged by the deployment gate (goals drawn across
+//! the TSRs, [`crate::trials::run_gated`]). The alternative is
+//! - **distinguished** when the gate fails it: validation would reject a spec grounded on it;
+//! - **not distinguished** when the gate passes it: a spec grounded on it would be deployed;
+//! - **undecided** when the gate cannot tell within its trials (it fails some 0.2–2 %);
 //! - **equivalent** when the two objects are held in one fixed relation: by the task's
 //!   randomization (a group, an object riding on what moves it, things nothing moves; see
 //!   [`akl_scene::Task::fixed_relations`]) or by the spec itself (an object an earlier keyframe
-//!   put down, grounded on its reference, stays where that reference puts it);
-//! - **not distinguished** otherwise: the randomization cannot tell the two apart.
+//!   put down, grounded on its reference, stays where that reference puts it). These are not
+//!   executed.
+//!
+//! A gate, not a fixed share of a fixed number of trials: an alternative failing 90 % of
+//! trials read "distinguished" by a bar of 18 of 20 only two times in three, while the gate
+//! fails it at its first or second trial nearly always; and the gate's verdict is the question
+//! a user has: would validation catch this wrong grounding?
 //!
 //! "Nominal execution" is the spec grounded on the task file's placements, keyframe by
 //! keyframe, with every object released where its release keyframe puts it; so a keyframe
 //! after a placement is re-grounded on the placed object where it then stands.
 
-use crate::batch::{Batch, BatchOptions};
-use crate::error::ExecError;
-use crate::report::Cause;
-use crate::trial::ExecOptions;
+use crate::trials::run_gated;
+use akl_exec::error::ExecError;
+use akl_exec::report::Cause;
+use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
+use akl_stats::{Decision, Gate, GateOptions, PassRate};
 use akl_tsr::{Gripper, Pose, TaskSpec, WORLD_FRAME};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -29,26 +38,21 @@ use std::collections::BTreeMap;
 /// How the sensitivity is measured.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GroundingOptions {
-    /// Randomized trials per alternative.
-    pub trials: usize,
+    /// The gate each alternative is judged by.
+    pub gate: GateOptions,
     /// Seed of the first trial (the same trials for every alternative).
     pub seed: u64,
     /// Trials in parallel.
     pub jobs: usize,
-    /// Share of failed trials that distinguishes an alternative (0–1).
-    pub share: f64,
 }
 
 impl Default for GroundingOptions {
-    /// 20 trials, 18 of which must fail. The wrong groundings of the built-in truths fail
-    /// 91–100 % of 100 trials; at 10 trials one in a dozen of those near 93 % shows two passes
-    /// and reads "not distinguished" by chance, at 20 about half as many.
+    /// The deployment gate's defaults, from seed 0, on one core.
     fn default() -> Self {
         GroundingOptions {
-            trials: 20,
+            gate: GateOptions::default(),
             seed: 0,
             jobs: 1,
-            share: 0.9,
         }
     }
 }
@@ -57,15 +61,17 @@ impl Default for GroundingOptions {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "verdict")]
 pub enum Verdict {
-    /// It fails enough trials: the randomization tells it from the reference.
+    /// The gate fails it: the randomization tells it from the reference.
     Distinguished,
     /// It is held in a fixed relation with the reference; not executed.
     Equivalent {
         /// Why, in words.
         because: String,
     },
-    /// It passes too many trials: the randomization cannot tell it from the reference.
+    /// The gate passes it: the randomization cannot tell it from the reference.
     NotDistinguished,
+    /// The gate could not decide within its trials, or was interrupted.
+    Undecided,
 }
 
 /// One alternative reference of a keyframe.
@@ -76,10 +82,12 @@ pub struct Alternative {
     /// The verdict.
     #[serde(flatten)]
     pub verdict: Verdict,
-    /// Trials run (0 for an equivalent one).
+    /// Trials the gate read (0 for an equivalent one).
     pub trials: usize,
     /// Trials failed.
     pub failed: usize,
+    /// The pass rate with its 95 % interval (none for an equivalent one).
+    pub pass_rate: Option<PassRate>,
     /// How many failed trials had each root cause (these add up to `failed`).
     pub causes: BTreeMap<Cause, usize>,
 }
@@ -99,8 +107,7 @@ pub struct KeyframeGroundings {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Groundings {
     /// Whether the check was stopped (Ctrl-C) before it had measured every alternative: then
-    /// `keyframes` holds what it measured, the last alternative possibly on fewer trials than
-    /// asked (its `trials` says how many).
+    /// `keyframes` holds what it measured, the last alternative possibly undecided.
     pub interrupted: bool,
     /// Every keyframe, in order, with its alternatives.
     pub keyframes: Vec<KeyframeGroundings>,
@@ -242,6 +249,7 @@ pub fn check_groundings(
 ) -> Result<Groundings, ExecError> {
     spec.validate()?;
     spec.check_references(task.world.names())?;
+    let gate = Gate::new(options.gate).map_err(|e| ExecError::Options(e.to_string()))?;
     let poses = nominal_poses(task, spec);
     let names: Vec<String> = task
         .world
@@ -266,16 +274,19 @@ pub fn check_groundings(
                     verdict: Verdict::Equivalent { because },
                     trials: 0,
                     failed: 0,
+                    pass_rate: None,
                     causes: BTreeMap::new(),
                 },
                 None => {
                     let wrong = regrounded(spec, k, other, &poses[k]).ok_or_else(|| {
                         ExecError::Options(format!("keyframe {k}: cannot re-ground on {other}"))
                     })?;
-                    let (alternative, cut) = measure(robot, task, &wrong, exec, options, other)?;
-                    interrupted |= cut;
-                    if alternative.trials == 0 {
-                        break;
+                    let alternative = measure(robot, task, &wrong, exec, &gate, options, other)?;
+                    if exec.interrupt.raised() {
+                        interrupted = true;
+                        if alternative.trials == 0 {
+                            break;
+                        }
                     }
                     alternative
                 }
@@ -301,45 +312,40 @@ pub fn check_groundings(
     })
 }
 
-/// Executes `wrong` (re-grounded on `other`) in the check's trials; also says whether the batch
-/// was interrupted.
+/// Judges `wrong` (re-grounded on `other`) by `gate` on the check's trials.
 fn measure(
     robot: &Robot,
     task: &Task,
     wrong: &TaskSpec,
     exec: &ExecOptions,
+    gate: &Gate,
     options: &GroundingOptions,
     other: &str,
-) -> Result<(Alternative, bool), ExecError> {
-    let batch = Batch::new(
+) -> Result<Alternative, ExecError> {
+    let gated = run_gated(
         robot,
         task,
         wrong,
         exec,
-        BatchOptions {
-            trials: options.trials,
-            randomize: true,
-            seed: options.seed,
-            jobs: options.jobs,
-        },
+        gate,
+        options.seed,
+        options.jobs,
+        false,
+        &|_| {},
     )?;
-    let report = batch.run(&|_| {})?;
-    let failed = report.trials - report.passed;
-    let verdict = if failed as f64 >= options.share * report.trials as f64 {
-        Verdict::Distinguished
-    } else {
-        Verdict::NotDistinguished
-    };
-    Ok((
-        Alternative {
-            reference: other.to_string(),
-            verdict,
-            trials: report.trials,
-            failed,
-            causes: report.failures,
+    let o = gated.outcome;
+    Ok(Alternative {
+        reference: other.to_string(),
+        verdict: match gated.decision {
+            Some(Decision::Fails) => Verdict::Distinguished,
+            Some(Decision::Passes) => Verdict::NotDistinguished,
+            Some(Decision::Undecided) | None => Verdict::Undecided,
         },
-        report.interrupted,
-    ))
+        trials: o.run,
+        failed: o.run - o.passed,
+        pass_rate: Some(o.pass_rate),
+        causes: o.failures,
+    })
 }
 
 #[cfg(test)]
@@ -350,7 +356,7 @@ mod tests {
 
     #[test]
     fn a_check_interrupted_before_it_starts_measures_nothing() {
-        use crate::interrupt::Interrupt;
+        use akl_exec::interrupt::Interrupt;
         use std::sync::atomic::AtomicBool;
         static RAISED: AtomicBool = AtomicBool::new(true);
         let robot = Robot::panda().unwrap();

@@ -1,5 +1,5 @@
 //! Grounding sensitivity of the ground truths: every keyframe re-grounded on every other object
-//! (and the world) is either told apart by the randomization (at least 18 of 20 trials fail)
+//! (and the world) is either told apart by the randomization (the deployment gate fails it)
 //! or equivalent (held in a fixed relation by the task or by an earlier placement). The lists of
 //! equivalent groundings are asserted, not just printed: a change that makes the verifier blind
 //! to a grounding it used to catch fails this test.
@@ -9,15 +9,16 @@
 //! else lands off the mat), and the scanner row turns freely and must be crossed from its first
 //! scanner towards its last (a scan line with an end grounded off the row runs across it).
 
-use akl_exec::grounding::{check_groundings, GroundingOptions, Verdict};
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::builtin;
+use akl_validate::grounding::{check_groundings, GroundingOptions, Verdict};
 
 /// Alternatives named by (keyframe, reference).
 type Named = Vec<(usize, String)>;
 
-/// The equivalent and the not-distinguished alternatives of the truth of `task`.
+/// The equivalent alternatives of the truth of `task`, and those the gate does not fail
+/// (passed or undecided).
 fn verdicts(task: &str) -> (Named, Named) {
     let robot = Robot::panda().unwrap();
     let t = builtin::task(task).unwrap().unwrap();
@@ -26,7 +27,6 @@ fn verdicts(task: &str) -> (Named, Named) {
         jobs: 2,
         ..GroundingOptions::default()
     };
-    let must_fail = (options.trials as f64 * options.share).ceil() as usize;
     let measured = check_groundings(
         &robot,
         &t,
@@ -43,10 +43,13 @@ fn verdicts(task: &str) -> (Named, Named) {
         for a in &k.alternatives {
             match a.verdict {
                 Verdict::Equivalent { .. } => equivalent.push((k.keyframe, a.reference.clone())),
-                Verdict::NotDistinguished => {
+                Verdict::NotDistinguished | Verdict::Undecided => {
                     not_distinguished.push((k.keyframe, a.reference.clone()))
                 }
-                Verdict::Distinguished => assert!(a.failed >= must_fail, "{task}: {a:?}"),
+                Verdict::Distinguished => {
+                    let rate = a.pass_rate.as_ref().unwrap();
+                    assert!(a.failed > 0 && rate.upper < 0.99, "{task}: {a:?}")
+                }
             }
         }
     }
