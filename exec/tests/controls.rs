@@ -1,6 +1,6 @@
 //! Negative controls: specs built wrong from the ground truths, each of which the verification
-//! must reject in at least 9 of 10 randomized trials for the named cause, beside the ground
-//! truths, which must pass the same trials.
+//! must reject in at least 9 of 10 randomized trials for the named cause (and so the deployment
+//! gate fails it), beside the ground truths, which must pass the same trials.
 
 use akl_exec::arm::Drives;
 use akl_exec::batch::{Batch, BatchOptions};
@@ -8,6 +8,7 @@ use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::{builtin, Task};
+use akl_stats::{Decision, Gate, GateOptions};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::{Gripper, TaskSpec};
 
@@ -35,8 +36,17 @@ fn run(task: &Task, spec: &TaskSpec) -> BatchReport {
     run_with(task, spec, &ExecOptions::default())
 }
 
-/// At least 9 of the trials fail for `cause`, and the first such failure says `says`.
+/// At least 9 of the trials fail for `cause`, the first such failure says `says`, and the
+/// deployment gate (its defaults, the trials judged in seed order) fails the spec.
 fn rejected_for(report: &BatchReport, cause: Cause, says: &str) {
+    let gate = Gate::new(GateOptions::default()).unwrap();
+    let mut in_order: Vec<_> = report.reports.iter().collect();
+    in_order.sort_by_key(|r| r.seed);
+    let judged = gate.judge(in_order.iter().map(|r| r.passed));
+    assert!(
+        matches!(judged, Some((Decision::Fails, _))),
+        "the gate: {judged:?}"
+    );
     let failing: Vec<_> = report
         .reports
         .iter()
@@ -327,6 +337,57 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
         "{:?}",
         nominal.grasps[0]
     );
+}
+
+/// What became of the pipe's insertion as planned on the clamp where the task file has it,
+/// executed with the clamp (walls and roof, not the rail) truly standing `offset` metres to
+/// the side of the tunnel's axis: whether it was a jam (the held pipe pressed into the clamp
+/// deeper or harder than a compliant insertion may, or the grasp gave way and the pipe slid
+/// in the hand), and what happened, for the message.
+fn insertion_into_a_clamp_moved_by(offset: f64) -> (bool, String) {
+    use akl_exec::simulate::simulate;
+    use akl_exec::trial::Setup;
+    use akl_tsr::nalgebra::Translation3;
+    let robot = Robot::panda().unwrap();
+    let t = task("assembly");
+    let spec = t.truth.clone().unwrap();
+    let exec = ExecOptions::default();
+    let plan = akl_planner::plan_task(&robot, &spec, &t.world, &exec.plan).unwrap();
+    let mut truth = t.world.clone();
+    for name in ["clamp_left", "clamp_right", "clamp_top"] {
+        let o = truth.object_mut(name).unwrap();
+        o.pose = Translation3::new(offset, 0.0, 0.0) * o.pose;
+    }
+    let setup = Setup {
+        robot: &robot,
+        task: &t,
+        spec: &spec,
+        options: &exec,
+    };
+    let obs = simulate(&setup, &truth, &plan, None).unwrap();
+    let limits = &exec.contacts;
+    let pressed = obs.contacts.collisions().iter().any(|c| {
+        c.a == "held pipe"
+            && c.b.starts_with("clamp")
+            && (c.depth > limits.max_brush_depth || c.force > limits.max_brush_force)
+    });
+    let pipe = &obs.grasps[1];
+    let gave_way = pipe.broke_at.is_some() && pipe.slip > exec.slip_limit;
+    let seen = format!("{:?} {:?}", obs.contacts.collisions(), pipe);
+    (pressed || gave_way, seen)
+}
+
+/// A jam still fails although an insertion may brush its fixture. The tunnel leaves 6 mm
+/// either side of the pipe, so a line 4 mm off its axis goes through; 8 mm off, the pipe's end
+/// runs into a wall's face 2 mm deep, and the impact (about 170 N) breaks the grasp and slides
+/// the pipe in the hand. The planner cannot see this (it plans on the clamp where it was
+/// perceived); only the simulation can.
+#[test]
+fn an_insertion_off_the_tunnels_axis_jams_beyond_its_clearance() {
+    let (jam, seen) = insertion_into_a_clamp_moved_by(0.004);
+    assert!(!jam, "within the clearance: {seen}");
+    let (jam, seen) = insertion_into_a_clamp_moved_by(0.008);
+    assert!(jam, "into a wall: {seen}");
 }
 
 /// Inspection with no pass over the scanners (grasp, then straight to the shelf): the part
