@@ -128,7 +128,18 @@ fn execute_runs_every_learned_spec_in_simulation() {
             assert_eq!(rate, Some(1.0), "a correct spec fails to run: {t}");
         }
     }
-    assert!(report["summary"]["pass_rates"].is_array());
+    let rows = report["summary"]["pass_rates"].as_array().unwrap();
+    let overall = rows.last().unwrap();
+    assert_eq!(overall["task"], "overall");
+    // Every method's executions pooled, with the interval: AKL's three specs ran once each.
+    let akl = &overall["pass_rate"][2];
+    assert_eq!(akl["trials"], 3, "{overall}");
+    assert!(akl["lower"].as_f64().unwrap() <= akl["upper"].as_f64().unwrap());
+    let text = stdout(&akl_in(
+        &dir,
+        &["eval", "--participants", "1", "--execute", "1"],
+    ));
+    assert!(text.contains("95 % CI"), "{text}");
 }
 
 #[test]

@@ -21,15 +21,15 @@ use crate::population::{Participant, Population};
 /// Runs a learned spec in simulation: the pass rate of `trials` randomized executions. The
 /// study knows no robot (learning never does); the caller plugs the executor in.
 pub trait Executor: Sync {
-    /// The share of `trials` randomized executions of `spec` on `task` (seeds from `seed`)
-    /// that pass, or why none could run.
-    fn pass_rate(
+    /// How many of `trials` randomized executions of `spec` on `task` (seeds from `seed`)
+    /// pass, or why none could run.
+    fn passes(
         &self,
         spec: &TaskSpec,
         task: &Task,
         trials: usize,
         seed: u64,
-    ) -> Result<f64, String>;
+    ) -> Result<usize, String>;
 }
 
 /// What a study runs.
@@ -141,7 +141,11 @@ pub struct Trial {
     pub success: bool,
     /// Learning time (s), from the recording to the spec (Figure 4-9).
     pub runtime_s: f64,
-    /// Share of randomized executions that passed, with `--execute`.
+    /// Randomized executions of the learned spec, with `--execute`.
+    pub executions: Option<usize>,
+    /// How many of them passed.
+    pub passed_executions: Option<usize>,
+    /// Their share.
     pub pass_rate: Option<f64>,
     /// Why the spec could not be executed, if so.
     pub execute_error: Option<String>,
@@ -398,6 +402,8 @@ fn run_trial(
         incorrect_constraints: 0,
         success: false,
         runtime_s,
+        executions: None,
+        passed_executions: None,
         pass_rate: None,
         execute_error: None,
         spec: None,
@@ -418,8 +424,12 @@ fn run_trial(
         trial.incorrect_constraints = scores.incorrect_lines;
         trial.success = scores.success;
         if let Some((executor, runs)) = execute {
-            match executor.pass_rate(&spec, s.task, runs, s.seed) {
-                Ok(rate) => trial.pass_rate = Some(rate),
+            match executor.passes(&spec, s.task, runs, s.seed) {
+                Ok(passed) => {
+                    trial.executions = Some(runs);
+                    trial.passed_executions = Some(passed);
+                    trial.pass_rate = Some(passed as f64 / runs as f64);
+                }
                 Err(e) => trial.execute_error = Some(e),
             }
         }

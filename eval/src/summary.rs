@@ -3,6 +3,7 @@
 //! runtime per method (§4.6.8) and, when executed, pass rates.
 
 use akl_learn::Method;
+use akl_stats::PassRate;
 use serde::Serialize;
 
 use crate::study::Trial;
@@ -110,13 +111,18 @@ pub struct Runtime {
     pub max_s: f64,
 }
 
-/// Mean execution pass rate of one method's specs on one task (or overall).
+/// Execution pass rate of one method's specs on one task (or overall).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassRow {
     /// The task, or `overall`.
     pub task: String,
     /// Mean pass rate (0–1) of each method's specs, in [`TABLE_ORDER`]; `None` when none ran.
     pub mean_pass_rate: [Option<f64>; 3],
+    /// Every execution of each method's specs pooled, with the 95 % interval, in
+    /// [`TABLE_ORDER`]. Pooled executions of different specs are not one spec's trials: the
+    /// interval says how well the executions measure the method's average over the
+    /// participants' specs, not how any one spec does.
+    pub pass_rate: [Option<PassRate>; 3],
 }
 
 /// Everything the study's tables show.
@@ -175,6 +181,12 @@ pub fn summarize(trials: &[Trial], tasks: &[String]) -> Summary {
             mean_pass_rate: TABLE_ORDER.map(|m| {
                 let rates: Vec<f64> = of(trials, task, m).filter_map(|t| t.pass_rate).collect();
                 mean(&rates)
+            }),
+            pass_rate: TABLE_ORDER.map(|m| {
+                let (passed, run) = of(trials, task, m)
+                    .filter_map(|t| Some((t.passed_executions?, t.executions?)))
+                    .fold((0, 0), |(p, n), (tp, tn)| (p + tp, n + tn));
+                (run > 0).then(|| PassRate::new(passed, run))
             }),
         };
         let mut rows: Vec<PassRow> = tasks.iter().map(|n| pass(Some(n))).collect();
@@ -253,6 +265,8 @@ mod tests {
             incorrect_constraints: usize::from(!success),
             success,
             runtime_s,
+            executions: None,
+            passed_executions: None,
             pass_rate: None,
             execute_error: None,
             spec: None,

@@ -27,13 +27,13 @@ struct Simulation {
 }
 
 impl Executor for Simulation {
-    fn pass_rate(
+    fn passes(
         &self,
         spec: &TaskSpec,
         task: &Task,
         trials: usize,
         seed: u64,
-    ) -> Result<f64, String> {
+    ) -> Result<usize, String> {
         let exec = ExecOptions::default();
         let options = BatchOptions {
             trials,
@@ -44,7 +44,7 @@ impl Executor for Simulation {
         let batch =
             Batch::new(&self.robot, task, spec, &exec, options).map_err(|e| e.to_string())?;
         let report = batch.run(&|_| {}).map_err(|e| e.to_string())?;
-        Ok(report.passed as f64 / report.trials as f64)
+        Ok(report.passed)
     }
 }
 
@@ -221,14 +221,14 @@ fn print_study(study: &Study, summary: &Summary, wall_s: f64) {
     }
     print!("{}", t.render());
     if let Some(rows) = &summary.pass_rates {
-        println!("\nmean pass rate in simulation, %");
+        println!("\npass rate in simulation: executions passed, every spec's pooled (95 % CI)");
         let mut t = Table::new(["task", "KD", "mACL", "AKL"]);
         for row in rows {
             let mut cells = vec![row.task.clone()];
             cells.extend(
-                row.mean_pass_rate
+                row.pass_rate
                     .iter()
-                    .map(|r| r.map_or("-".into(), |r| percent(100.0 * r))),
+                    .map(|r| r.map_or("-".into(), |r| r.to_string())),
             );
             t.row(cells);
         }
