@@ -346,9 +346,10 @@ pub struct GateArgs {
     /// The confidence each look of the sequential test shows it at.
     #[arg(long, value_name = "C", default_value_t = 0.95)]
     pub confidence: f64,
-    /// Trials after which the gate stops undecided.
-    #[arg(long, value_name = "N", default_value_t = 2000, alias = "randomize")]
-    pub max_trials: usize,
+    /// Trials after which the gate stops undecided (default 2,000; for `akl relax`, whose
+    /// undecided widenings are dropped, 1,000).
+    #[arg(long, value_name = "N", alias = "randomize")]
+    pub max_trials: Option<usize>,
 }
 
 /// `akl validate SPEC --task T ...`

@@ -38,7 +38,7 @@ pub fn run(args: CompareArgs) -> CliResult {
         validate: ValidateOptions {
             seed: args.seed,
             jobs: jobs(args.trials.jobs)?,
-            gate: gate_options(&args.gate)?,
+            gate: gate_options(&args.gate, GateOptions::default().max_trials)?,
             exec: exec_options(&args.trials),
         },
         scenes: args.scenes,

@@ -34,7 +34,7 @@ pub fn run(args: RelaxArgs) -> CliResult {
         gate_seed: args.seed.saturating_add(GATE_SEED_OFFSET),
         jobs: jobs(args.run.jobs)?,
         screen: args.screen,
-        gate: gate_options(&args.gate)?,
+        gate: gate_options(&args.gate, RelaxOptions::default().gate.max_trials)?,
         exec: exec_options(&args.run),
         ..RelaxOptions::default()
     };

@@ -51,13 +51,13 @@ struct Replay {
     command: String,
 }
 
-/// The gate `--min-success`, `--confidence` and `--max-trials` ask for (checked: bad values
-/// exit 2).
-pub(crate) fn gate_options(args: &GateArgs) -> Result<GateOptions, CliError> {
+/// The gate `--min-success`, `--confidence` and `--max-trials` ask for, `default_max` trials
+/// at most unless told (checked: bad values exit 2).
+pub(crate) fn gate_options(args: &GateArgs, default_max: usize) -> Result<GateOptions, CliError> {
     let options = GateOptions {
         min_success: args.min_success,
         confidence: args.confidence,
-        max_trials: args.max_trials,
+        max_trials: args.max_trials.unwrap_or(default_max),
     };
     Gate::new(options).map_err(CliError::input)?;
     Ok(options)
@@ -143,7 +143,7 @@ pub fn run(args: ValidateArgs) -> CliResult {
     let options = ValidateOptions {
         seed: args.seed,
         jobs: jobs(args.trials.jobs)?,
-        gate: gate_options(&args.gate)?,
+        gate: gate_options(&args.gate, GateOptions::default().max_trials)?,
         exec: exec_options(&args.trials),
     };
     let demo = match &args.demo {

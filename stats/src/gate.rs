@@ -191,6 +191,16 @@ impl Gate {
         }
     }
 
+    /// Whether a spec with `failed` failures so far can still pass within the gate's trials
+    /// (a search that keeps only what passes may stop once it cannot).
+    pub fn can_still_pass(&self, failed: usize) -> bool {
+        self.pass_at_most
+            .last()
+            .copied()
+            .flatten()
+            .is_some_and(|k| failed <= k)
+    }
+
     /// The trials a spec that never fails needs to pass.
     pub fn trials_to_pass_without_failure(&self) -> Option<usize> {
         self.pass_at_most
@@ -332,6 +342,20 @@ mod tests {
             (mean - exact.expected_trials).abs() / exact.expected_trials < 0.02,
             "{mean} {exact:?}"
         );
+    }
+
+    #[test]
+    fn a_spec_cannot_pass_once_its_failures_exceed_the_last_boundary() {
+        let g = gate();
+        let last = (0..100)
+            .take_while(|&k| g.can_still_pass(k))
+            .last()
+            .unwrap();
+        assert_eq!(g.decide(2000, last), Some(Decision::Passes));
+        assert_ne!(g.decide(2000, last + 1), Some(Decision::Passes));
+        for n in 1..=2000 {
+            assert_ne!(g.decide(n, last + 1), Some(Decision::Passes), "{n}");
+        }
     }
 
     #[test]
