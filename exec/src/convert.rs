@@ -6,7 +6,7 @@ use akl_planner::Geometry;
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
-use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, Vector};
+use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, SharedShape, Vector};
 
 /// A pose as rapier's single-precision pose (rapier's poses are parry3d's, so the planner's
 /// conversion serves both).
@@ -41,21 +41,31 @@ pub fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
             0.5 * size[2] as f32,
         )
         .position(to_sim(origin)),
-        Shape::Cylinder { radius, length } => prism(radius, length).position(to_sim(origin)),
+        Shape::Cylinder { radius, length } => {
+            ColliderBuilder::new(cylinder_object(radius, length)).position(to_sim(origin))
+        }
         Shape::Sphere { radius } => ColliderBuilder::ball(radius as f32).position(to_sim(origin)),
     }
 }
 
-/// Sides of the prism that stands in for a movable cylinder.
+/// Sides of the prism that keeps a lying cylinder from rolling.
 pub const PRISM_SIDES: usize = 24;
 
-/// A cylinder of the scene as a [`PRISM_SIDES`]-sided prism along z whose faces touch the true
-/// cylinder (so it rests at the same height), with faces normal to ±x and ±y.
+/// A movable cylinder as the simulation holds it: rapier's exact cylinder and a
+/// [`PRISM_SIDES`]-sided prism whose faces touch it (so both rest at the same height), with
+/// faces normal to ±x and ±y, as one compound shape along z.
 ///
-/// rapier's exact cylinder lying on a box touches it along a line with no rolling resistance,
-/// and numerical error sets it rolling (a pipe resting on a rail rolls off within two seconds);
-/// a prism rests on a face, as a real pipe held by friction and its own imperfections does.
-fn prism(radius: f64, length: f64) -> ColliderBuilder {
+/// Each alone fails one way. rapier's exact cylinder lying on a box touches it along a line
+/// with no rolling resistance, and numerical error sets it rolling (a pipe resting on a rail
+/// rolls off within two seconds); the prism rests on a face, as a real pipe held by friction
+/// and its own imperfections does. But a prism standing on its end rocks and can fall: parry
+/// reduces the contact of its 24-gon end face with a box to four points taken from a few
+/// neighbouring corners on one side of the face, a support on one side of the centre of mass
+/// (a 2 × 16 cm tube standing untouched tilted 0.08 rad within 2 s, and more sides made it
+/// worse; solver iterations and smaller steps did not help), while the exact cylinder's end
+/// face gives four points spread round its rim. Together, standing, the cylinder's points
+/// carry it; lying, the prism's face does.
+fn cylinder_object(radius: f64, length: f64) -> SharedShape {
     let n = PRISM_SIDES;
     let corner = radius / (std::f64::consts::PI / n as f64).cos();
     let h = 0.5 * length;
@@ -66,9 +76,12 @@ fn prism(radius: f64, length: f64) -> ColliderBuilder {
             [Vector::new(x, y, -h as f32), Vector::new(x, y, h as f32)]
         })
         .collect();
-    ColliderBuilder::convex_hull(&points).unwrap_or_else(|| {
-        ColliderBuilder::cylinder(h as f32, radius as f32).position(to_sim(&cylinder_axis()))
-    })
+    let exact = SharedShape::cylinder(h as f32, radius as f32);
+    let along_z = to_sim(&cylinder_axis());
+    match SharedShape::convex_hull(&points) {
+        Some(prism) => SharedShape::compound(vec![(SimPose::IDENTITY, prism), (along_z, exact)]),
+        None => SharedShape::compound(vec![(along_z, exact)]),
+    }
 }
 
 /// A collider for one collision element of a robot link, placed at `origin` in the link frame.
@@ -100,7 +113,7 @@ mod tests {
     }
 
     #[test]
-    fn a_cylinder_object_is_a_prism_along_z_touching_the_true_cylinder() {
+    fn a_cylinder_object_lies_along_z_and_touches_the_true_cylinder() {
         let c = object_collider(
             &Shape::Cylinder {
                 radius: 0.02,
