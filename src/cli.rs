@@ -222,6 +222,15 @@ pub struct EvalArgs {
     pub json: bool,
 }
 
+/// `--any-task`, shared by the commands that run a spec in a task.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct AnyTaskArg {
+    /// Run the spec even though its `task` field names another task than --task (refused by
+    /// default: a spec given another task's world is almost always a mistake).
+    #[arg(long)]
+    pub any_task: bool,
+}
+
 /// `--robot DIR`, shared by the commands that use a robot.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RobotArg {
@@ -296,6 +305,8 @@ pub struct PlanArgs {
     #[arg(short = 'o', long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     #[command(flatten)]
+    pub fit: AnyTaskArg,
+    #[command(flatten)]
     pub robot: RobotArg,
     /// Print the per-segment summary as JSON instead of a table.
     #[arg(long)]
@@ -319,6 +330,8 @@ pub struct FlexibilityArgs {
     /// Scene i is placed and planned with seed SEED + i.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    #[command(flatten)]
+    pub fit: AnyTaskArg,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the report as JSON instead of tables.
@@ -385,6 +398,8 @@ pub struct ValidateArgs {
     #[command(flatten)]
     pub trials: TrialArgs,
     #[command(flatten)]
+    pub fit: AnyTaskArg,
+    #[command(flatten)]
     pub robot: RobotArg,
     /// Print the validation as JSON.
     #[arg(long)]
@@ -412,6 +427,8 @@ pub struct RelaxArgs {
     pub seed: u64,
     #[command(flatten)]
     pub run: TrialArgs,
+    #[command(flatten)]
+    pub fit: AnyTaskArg,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the relaxation as JSON.
@@ -441,6 +458,8 @@ pub struct CompareArgs {
     pub seed: u64,
     #[command(flatten)]
     pub trials: TrialArgs,
+    #[command(flatten)]
+    pub fit: AnyTaskArg,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the rows as JSON.
@@ -500,6 +519,8 @@ pub struct ExecuteArgs {
     /// `0,0` plans on the true poses.
     #[arg(long, value_name = "MM,DEG", default_value = "2,1", value_parser = parse_pose_noise)]
     pub pose_noise: PoseNoiseArg,
+    #[command(flatten)]
+    pub fit: AnyTaskArg,
     #[command(flatten)]
     pub robot: RobotArg,
     /// Print the full report as JSON instead of a table.

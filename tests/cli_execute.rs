@@ -236,7 +236,7 @@ fn bad_input_exits_2_and_writes_nothing() {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection"));
     let spec = spec.to_str().unwrap();
     std::fs::write(dir.join("broken.json"), "{\"akl_spec\": 1, \"keyf").unwrap();
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 10] = [
         (
             &["execute", "missing.json", "--task", "inspection"],
             "missing.json",
@@ -246,7 +246,15 @@ fn bad_input_exits_2_and_writes_nothing() {
             "broken.json",
         ),
         (&["execute", spec, "--task", "kitchen"], "kitchen"),
-        (&["execute", spec, "--task", "pick_place"], "part"),
+        // Another task's spec is refused, and with --any-task its objects must exist there.
+        (
+            &["execute", spec, "--task", "pick_place"],
+            "the spec is for task `inspection`, not `pick_place` (--any-task",
+        ),
+        (
+            &["execute", spec, "--task", "pick_place", "--any-task"],
+            "part",
+        ),
         (
             &["execute", spec, "--task", "inspection", "--randomize", "0"],
             "--randomize",
@@ -532,4 +540,21 @@ fn json_failures_name_their_keyframe() {
             );
         }
     }
+}
+
+#[test]
+fn a_spec_for_another_task_runs_only_when_asked() {
+    let dir = scratch("execute-any-task");
+    let text_of =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("pick_place")))
+            .unwrap();
+    let mut spec: serde_json::Value = serde_json::from_str(&text_of).unwrap();
+    spec["task"] = "my_pick_place".into();
+    std::fs::write(dir.join("mine.json"), spec.to_string()).unwrap();
+    let args = ["execute", "mine.json", "--task", "pick_place"];
+    let refused = akl_in(&dir, &args);
+    assert_eq!(refused.status.code(), Some(2), "{}", text(&refused.stderr));
+    assert!(text(&refused.stderr).contains("my_pick_place"));
+    let ran = akl_in(&dir, &[&args[..], &["--any-task"]].concat());
+    assert!(ran.status.success(), "{}", text(&ran.stderr));
 }

@@ -124,9 +124,15 @@ fn a_cylinder_tilted_past_its_tipping_angle_falls() {
         }
         let upright = (sim.object_pose(1).rotation * Vector3::z()).angle(&Vector3::z());
         if falls {
-            assert!(upright > 1.0, "tilted {angle:.3} rad: ends {upright:.3} rad from upright");
+            assert!(
+                upright > 1.0,
+                "tilted {angle:.3} rad: ends {upright:.3} rad from upright"
+            );
         } else {
-            assert!(upright < 0.01, "tilted {angle:.3} rad: ends {upright:.3} rad from upright");
+            assert!(
+                upright < 0.01,
+                "tilted {angle:.3} rad: ends {upright:.3} rad from upright"
+            );
         }
     }
 }

@@ -32,7 +32,7 @@ pub fn run(args: CompareArgs) -> CliResult {
     let specs = args
         .specs
         .iter()
-        .map(|p| Ok((p.display().to_string(), load_spec_for(p, &task)?)))
+        .map(|p| Ok((p.display().to_string(), load_spec_for(p, &task, args.fit)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let options = CompareOptions {
         validate: ValidateOptions {

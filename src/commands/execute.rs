@@ -69,7 +69,7 @@ pub(crate) struct Executed {
 pub fn run(args: ExecuteArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = TaskSpec::load(&args.spec).map_err(CliError::input)?;
+    let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let options = ExecOptions {
         plan: PlanOptions {
             budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),

@@ -33,7 +33,7 @@ fn seconds(v: Option<f64>) -> String {
 pub fn run(args: FlexibilityArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = super::load_spec_for(&args.spec, &task)?;
+    let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let in_spec = |e: FlexibilityError| match e {
         FlexibilityError::Scene(_) => CliError::internal(e),
         _ => CliError::input(format!("{}: {e}", args.spec.display())),

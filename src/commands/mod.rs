@@ -17,7 +17,7 @@ mod task;
 mod teach;
 mod validate;
 
-use crate::cli::{Cli, Command};
+use crate::cli::{AnyTaskArg, Cli, Command};
 use crate::exit::{CliError, CliResult};
 use akl_learn::calibration::Calibration;
 use akl_learn::teacher::TeacherProfile;
@@ -89,9 +89,22 @@ pub(crate) fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The spec in `path`, checked against `task`'s objects; errors name the file.
-pub(crate) fn load_spec_for(path: &Path, task: &Task) -> Result<TaskSpec, CliError> {
+/// The spec in `path`, checked against `task`: it must be for that task (its `task` field)
+/// unless `fit.any_task`, and name only its objects; errors name the file.
+pub(crate) fn load_spec_for(
+    path: &Path,
+    task: &Task,
+    fit: AnyTaskArg,
+) -> Result<TaskSpec, CliError> {
     let spec = TaskSpec::load(path).map_err(CliError::input)?;
+    if spec.task != task.name && !fit.any_task {
+        return Err(CliError::input(format!(
+            "{}: the spec is for task `{}`, not `{}` (--any-task runs it anyway)",
+            path.display(),
+            spec.task,
+            task.name
+        )));
+    }
     spec.check_references(task.world.names())
         .map_err(|source| {
             CliError::input(FileError {

@@ -54,7 +54,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     }
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = super::load_spec_for(&args.spec, &task)?;
+    let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let options = PlanOptions {
         seed: args.seed,
         budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),

@@ -28,7 +28,7 @@ pub fn run(args: RelaxArgs) -> CliResult {
     check_output(&args.output, "relaxed spec")?;
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = load_spec_for(&args.spec, &task)?;
+    let spec = load_spec_for(&args.spec, &task, args.fit)?;
     let options = RelaxOptions {
         seed: args.seed,
         gate_seed: args.seed.saturating_add(GATE_SEED_OFFSET),

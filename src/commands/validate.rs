@@ -134,7 +134,7 @@ fn replay_command(args: &ValidateArgs, seed: u64) -> String {
 pub fn run(args: ValidateArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = builtin::resolve(&args.task).map_err(CliError::input)?;
-    let spec = load_spec_for(&args.spec, &task)?;
+    let spec = load_spec_for(&args.spec, &task, args.fit)?;
     for (path, what) in [(&args.report, "report"), (&args.trace, "trace")] {
         if let Some(p) = path {
             check_output(p, what)?;
