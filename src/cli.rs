@@ -222,6 +222,24 @@ pub struct EvalArgs {
     pub json: bool,
 }
 
+/// `--speed-scale S`, shared by the commands that plan.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct SpeedArg {
+    /// How fast the arm may move, in (0, 1]: joint velocity limits times S, accelerations
+    /// times S² (MoveIt's scaling factors S and S²), fingers at S times their speed, so every
+    /// motion takes 1/S as long. 1 (the default) moves as fast as the robot allows. Recorded
+    /// in reports.
+    #[arg(long, value_name = "S", default_value_t = 1.0, value_parser = parse_speed_scale)]
+    pub speed_scale: f64,
+}
+
+fn parse_speed_scale(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s > 0.0 && s <= 1.0 => Ok(s),
+        _ => Err(format!("expected a number in (0, 1], got `{text}`")),
+    }
+}
+
 /// `--any-task`, shared by the commands that run a spec in a task.
 #[derive(Debug, Clone, Copy, clap::Args)]
 pub struct AnyTaskArg {
@@ -311,6 +329,8 @@ pub struct PlanArgs {
     /// Print the per-segment summary as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub speed: SpeedArg,
 }
 
 /// `akl flexibility SPEC --task T ...`
@@ -337,6 +357,8 @@ pub struct FlexibilityArgs {
     /// Print the report as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub speed: SpeedArg,
 }
 
 /// Trial settings shared by `akl validate`, `relax` and `compare`.
@@ -348,6 +370,8 @@ pub struct TrialArgs {
     /// Perception error of the movable objects' poses (as `akl execute --pose-noise`).
     #[arg(long, value_name = "MM,DEG", default_value = "2,1", value_parser = parse_pose_noise)]
     pub pose_noise: PoseNoiseArg,
+    #[command(flatten)]
+    pub speed: SpeedArg,
 }
 
 /// What the deployment gate asks (shared by `akl validate`, `relax` and `compare`).
@@ -526,6 +550,8 @@ pub struct ExecuteArgs {
     /// Print the full report as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub speed: SpeedArg,
 }
 
 /// `--pose-noise MM,DEG`: standard deviations of perceived position (mm) and yaw (degrees).
@@ -572,6 +598,8 @@ pub struct DemoArgs {
     /// Trials run in parallel (default: the number of cores).
     #[arg(long, value_name = "J")]
     pub jobs: Option<usize>,
+    #[command(flatten)]
+    pub speed: SpeedArg,
 }
 
 /// `akl calibrate`

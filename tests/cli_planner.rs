@@ -286,3 +286,54 @@ fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
     assert_eq!(err.lines().count(), 1, "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_speed_scale_slows_the_plan_and_the_report_records_it() {
+    let duration = |scale: &str| {
+        let o = akl(&[
+            "plan",
+            "tasks/pick_place.truth.json",
+            "--task",
+            "pick_place",
+            "--speed-scale",
+            scale,
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v = json(&o);
+        assert_eq!(
+            v["speed_scale"].as_f64().unwrap(),
+            scale.parse::<f64>().unwrap()
+        );
+        v["duration"].as_f64().unwrap()
+    };
+    let (full, half) = (duration("1"), duration("0.5"));
+    // Every arm and finger motion takes twice as long; the pauses after the gripper stay.
+    assert!(
+        half >= 1.6 * full && half < 2.0 * full,
+        "{full} s, then {half} s"
+    );
+    let o = akl(&[
+        "execute",
+        "tasks/pick_place.truth.json",
+        "--task",
+        "pick_place",
+        "--speed-scale",
+        "0.5",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(json(&o)["settings"]["speed_scale"], 0.5);
+    for bad in ["0", "1.5", "fast"] {
+        let o = akl(&[
+            "plan",
+            "tasks/pick_place.truth.json",
+            "--task",
+            "pick_place",
+            "--speed-scale",
+            bad,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(stderr(&o).contains("--speed-scale"), "{}", stderr(&o));
+    }
+}

@@ -191,6 +191,12 @@ pub struct SimArm {
 }
 
 impl SimArm {
+    /// Moves the fingers at `scale` (in (0, 1]) of the gripper's speed, as a plan timed with
+    /// that speed scale expects ([`akl_planner::PlanOptions::speed_scale`]).
+    pub fn scale_finger_speed(&mut self, scale: f64) {
+        self.finger_speed *= scale;
+    }
+
     /// Adds `robot`, its base at `base`, to `sim` at configuration `q` with the fingers opened
     /// `width`; `None` when the robot has no two-finger gripper the simulation can model.
     pub fn new(

@@ -59,6 +59,9 @@ impl<'a> Batch<'a> {
         }
         spec.validate()?;
         spec.check_references(task.world.names())?;
+        exec.plan
+            .check()
+            .map_err(|e| ExecError::Options(e.to_string()))?;
         let worlds = (0..options.trials)
             .map(|i| trial_world(task, options.randomize, trial_seed(options.seed, i)))
             .collect::<Result<Vec<_>, _>>()?;
@@ -187,6 +190,7 @@ pub fn settings(options: &ExecOptions, spec: &TaskSpec) -> Settings {
         contacts: options.contacts,
         settle: options.settle,
         settle_max: options.settle_max,
+        speed_scale: options.plan.speed_scale,
     }
 }
 

@@ -375,6 +375,8 @@ pub struct Settings {
     pub settle: f64,
     /// Longest settling time after the plan, while an object still moves (seconds).
     pub settle_max: f64,
+    /// Share of the joint velocity and acceleration limits the plans were timed with.
+    pub speed_scale: f64,
 }
 
 /// The outcome of a batch of trials of one spec on one task.

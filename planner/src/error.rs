@@ -42,9 +42,13 @@ pub enum IkError {
     BadSeed(String),
 }
 
-/// Why a spec could not be planned; every variant names the keyframe or segment at fault.
+/// Why a spec could not be planned; every variant but [`PlanError::Options`] names the
+/// keyframe or segment at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PlanError {
+    /// The planning options are out of range (e.g. a speed scale of 0).
+    #[error("{0}")]
+    Options(String),
     /// The spec cannot be grounded in the world (unknown reference object).
     #[error("{0}")]
     Grounding(String),
@@ -110,7 +114,7 @@ impl PlanError {
             | PlanError::NoCollisionFreeIk { keyframe, .. }
             | PlanError::BudgetExhausted { keyframe, .. }
             | PlanError::Line { keyframe, .. } => Some(*keyframe),
-            PlanError::Grounding(_) | PlanError::Start(_) => None,
+            PlanError::Grounding(_) | PlanError::Start(_) | PlanError::Options(_) => None,
         }
     }
 }

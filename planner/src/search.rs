@@ -129,6 +129,7 @@ pub fn plan_best(
     world: &World,
     options: &PlanOptions,
 ) -> Result<BestPlan, PlanError> {
+    options.check()?;
     let count = options.budget.candidates.max(1);
     let mut best: Option<(usize, Plan)> = None;
     let mut candidates = Vec::with_capacity(count);

@@ -76,6 +76,39 @@ pub struct PlanOptions {
     /// default, one candidate, is the nominal-first plan; `PlanBudget::from_millis` turns a
     /// planning time into a candidate count.
     pub budget: PlanBudget,
+    /// How fast the arm may move, in (0, 1]: the joint velocity limits are multiplied by it and
+    /// the acceleration limits by its square, so every motion is the one planned at full speed
+    /// played 1/S times as long (MoveIt's velocity scaling factor S with its acceleration
+    /// scaling factor S²; with S for both, as MoveIt users often set them, a short move limited
+    /// by acceleration would only take 1/√S as long, and "half speed" would not halve the
+    /// speed). The fingers, joints too, move at S times their speed. The paths are the same;
+    /// only their timing changes (the pause after each gripper motion stays).
+    pub speed_scale: f64,
+}
+
+impl PlanOptions {
+    /// The joint velocity and acceleration limits the plan is timed with: the robot's,
+    /// scaled by [`PlanOptions::speed_scale`] and its square.
+    pub fn limits(&self, robot: &Robot) -> (Vec<f64>, Vec<f64>) {
+        let scale = |v: &[f64], by: f64| v.iter().map(|x| x * by).collect();
+        let s = self.speed_scale;
+        (
+            scale(robot.velocity_limits(), s),
+            scale(robot.acceleration_limits(), s * s),
+        )
+    }
+
+    /// Checks [`PlanOptions::speed_scale`].
+    pub fn check(&self) -> Result<(), PlanError> {
+        if self.speed_scale > 0.0 && self.speed_scale <= 1.0 {
+            Ok(())
+        } else {
+            Err(PlanError::Options(format!(
+                "the speed scale must be in (0, 1], not {}",
+                self.speed_scale
+            )))
+        }
+    }
 }
 
 impl Default for PlanOptions {
@@ -89,6 +122,7 @@ impl Default for PlanOptions {
             line: LineOptions::default(),
             gripper_settle: 0.2,
             budget: PlanBudget::SINGLE,
+            speed_scale: 1.0,
         }
     }
 }
@@ -340,12 +374,11 @@ impl<'a> Planner<'a> {
         allowed: Allowances,
         planning_time: f64,
     ) {
-        let vmax = self.robot.velocity_limits();
-        let amax = self.robot.acceleration_limits();
+        let (vmax, amax) = self.options.limits(self.robot);
         let timing = if kind == SegmentKind::Free {
-            timing::linear(&waypoints, vmax, amax)
+            timing::linear(&waypoints, &vmax, &amax)
         } else {
-            timing::cubic(&waypoints, vmax, amax)
+            timing::cubic(&waypoints, &vmax, &amax)
         };
         self.push_timed(
             kind,
@@ -602,12 +635,8 @@ impl<'a> Planner<'a> {
 
     /// Seconds a straight segment along `path` takes (timed as `push` times it).
     fn line_time(&self, path: &[Vec<f64>]) -> f64 {
-        timing::cubic(
-            path,
-            self.robot.velocity_limits(),
-            self.robot.acceleration_limits(),
-        )
-        .duration()
+        let (vmax, amax) = self.options.limits(self.robot);
+        timing::cubic(path, &vmax, &amax).duration()
     }
 
     /// Lifts a held object that still rests on its support, back along the tool axis.
@@ -925,7 +954,8 @@ impl<'a> Planner<'a> {
     /// of the grasp or release under way.
     fn gripper_segment(&mut self, i: usize, new_width: f64, allowed: Allowances) {
         let travel = self.robot.gripper_travel_time() * (new_width - self.width).abs()
-            / self.robot.open_width();
+            / self.robot.open_width()
+            / self.options.speed_scale;
         self.width = new_width;
         let q = self.q.clone();
         self.push_timed(

@@ -96,7 +96,11 @@ pub fn run(args: DemoArgs) -> CliResult {
         jobs: args.jobs,
         trace: Some(&trace_path),
         trace_trial: None,
-        options: ExecOptions::default(),
+        options: {
+            let mut options = ExecOptions::default();
+            options.plan.speed_scale = args.speed.speed_scale;
+            options
+        },
         report: Some(&report_path),
     })?;
     print_executed(&executed);

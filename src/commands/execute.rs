@@ -73,6 +73,7 @@ pub fn run(args: ExecuteArgs) -> CliResult {
     let options = ExecOptions {
         plan: PlanOptions {
             budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
+            speed_scale: args.speed.speed_scale,
             ..PlanOptions::default()
         },
         noise: pose_noise(args.pose_noise),

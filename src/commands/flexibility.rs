@@ -19,6 +19,7 @@ struct Report {
     task: String,
     freedom: Freedom,
     budget_ms: u64,
+    speed_scale: f64,
     gains: Option<Gains>,
 }
 
@@ -49,6 +50,7 @@ pub fn run(args: FlexibilityArgs) -> CliResult {
             seed: args.seed,
             plan: PlanOptions {
                 budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
+                speed_scale: args.speed.speed_scale,
                 ..PlanOptions::default()
             },
         };
@@ -59,6 +61,7 @@ pub fn run(args: FlexibilityArgs) -> CliResult {
         task: task.name.clone(),
         freedom,
         budget_ms: args.budget,
+        speed_scale: args.speed.speed_scale,
         gains,
     };
     if args.json {

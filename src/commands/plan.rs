@@ -37,6 +37,7 @@ struct PlanSummary {
     robot: String,
     seed: u64,
     budget_ms: u64,
+    speed_scale: f64,
     candidates: usize,
     candidates_planned: usize,
     chosen_candidate: usize,
@@ -58,6 +59,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     let options = PlanOptions {
         seed: args.seed,
         budget: PlanBudget::from_millis(args.budget, spec.keyframes.len()),
+        speed_scale: args.speed.speed_scale,
         ..PlanOptions::default()
     };
     let started = std::time::Instant::now();
@@ -81,6 +83,7 @@ pub fn run(args: PlanArgs) -> CliResult {
         robot: robot.name().to_string(),
         seed: args.seed,
         budget_ms: args.budget,
+        speed_scale: args.speed.speed_scale,
         candidates: best.candidates.len(),
         candidates_planned: best.candidates.iter().filter(|c| c.result.is_ok()).count(),
         chosen_candidate: best.chosen,
@@ -134,11 +137,12 @@ pub fn run(args: PlanArgs) -> CliResult {
         .nominal_duration
         .map_or("failed".to_string(), |d| format!("{d:.2} s"));
     println!(
-        "budget {} ms: {} candidates ({} planned), kept candidate {}; the nominal-first candidate: {nominal}",
+        "budget {} ms: {} candidates ({} planned), kept candidate {}; the nominal-first candidate: {nominal}; speed scale {}",
         summary.budget_ms,
         summary.candidates,
         summary.candidates_planned,
-        summary.chosen_candidate
+        summary.chosen_candidate,
+        summary.speed_scale
     );
     let mut table = Table::new([
         "#",

@@ -63,13 +63,15 @@ pub(crate) fn gate_options(args: &GateArgs, default_max: usize) -> Result<GateOp
     Ok(options)
 }
 
-/// Execution settings from `--pose-noise`, stopped by Ctrl-C.
+/// Execution settings from `--pose-noise` and `--speed-scale`, stopped by Ctrl-C.
 pub(crate) fn exec_options(args: &TrialArgs) -> ExecOptions {
-    ExecOptions {
+    let mut options = ExecOptions {
         noise: pose_noise(args.pose_noise),
         interrupt: crate::stop::interrupt(),
         ..ExecOptions::default()
-    }
+    };
+    options.plan.speed_scale = args.speed.speed_scale;
+    options
 }
 
 /// A library error as the CLI reports it: what the input got wrong (naming the spec file or

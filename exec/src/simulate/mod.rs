@@ -78,6 +78,7 @@ pub fn simulate(
         plan.gripper_width(0.0),
         &options.drives,
     )?;
+    arm.scale_finger_speed(options.plan.speed_scale);
     let mut gripper = Gripper::new(
         plan,
         setup.spec,
