@@ -245,3 +245,55 @@ fn a_reader_that_went_away_ends_akl_quietly() {
     assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
     assert_eq!(o.status.signal(), Some(libc::SIGPIPE), "{:?}", o.status);
 }
+
+/// The pick_place task file with `block_a` moved by `dz` metres, written to `dir/name`.
+fn pick_place_with_block_a_moved(dir: &std::path::Path, name: &str, dz: f64) -> String {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/pick_place.json"),
+    )
+    .unwrap();
+    let mut task: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for o in task["world"]["objects"].as_array_mut().unwrap() {
+        if o["name"] == "block_a" {
+            let z = o["pose"]["p"][2].as_f64().unwrap();
+            o["pose"]["p"][2] = (z + dz).into();
+        }
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, task.to_string()).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+#[test]
+fn a_scene_that_does_not_stand_still_or_interpenetrates_is_refused_at_load() {
+    let dir = scratch("task-unsettled");
+    let floating = pick_place_with_block_a_moved(&dir, "floating.json", 0.05);
+    let o = akl(&["task", "show", &floating]);
+    assert_eq!(o.status.code(), Some(2), "{}", stdout(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("block_a does not stay where it is put") && err.contains("fell 5.0 cm"),
+        "{err}"
+    );
+    let sunk = pick_place_with_block_a_moved(&dir, "sunk.json", -0.01);
+    let o = akl(&["task", "show", &sunk]);
+    assert_eq!(o.status.code(), Some(2), "{}", stdout(&o));
+    assert!(
+        stderr(&o).contains("`shelf_1` and `block_a` interpenetrate"),
+        "{}",
+        stderr(&o)
+    );
+    // Every command that loads a task checks it.
+    let o = akl(&[
+        "execute",
+        "tasks/pick_place.truth.json",
+        "--task",
+        &floating,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("block_a does not stay"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -27,7 +27,7 @@ fn main() {
         let task = builtin::task(name).expect("built in").expect("valid");
         let spec = task.truth.clone().expect("a ground truth");
         let worlds: Vec<_> = (0..PLACEMENTS)
-            .map(|seed| trial_world(&task, true, seed).expect("placeable"))
+            .map(|seed| trial_world(&task, true, seed, &options.physics).expect("placeable"))
             .collect();
         let setup = Setup {
             robot: &robot,

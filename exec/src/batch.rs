@@ -63,7 +63,14 @@ impl<'a> Batch<'a> {
             .check()
             .map_err(|e| ExecError::Options(e.to_string()))?;
         let worlds = (0..options.trials)
-            .map(|i| trial_world(task, options.randomize, trial_seed(options.seed, i)))
+            .map(|i| {
+                trial_world(
+                    task,
+                    options.randomize,
+                    trial_seed(options.seed, i),
+                    &exec.physics,
+                )
+            })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Batch {
             setup: Setup {

@@ -11,6 +11,7 @@ pub mod grasp;
 pub mod interrupt;
 pub mod perception;
 pub mod report;
+pub mod settle;
 pub mod simulate;
 pub mod trace;
 pub mod trial;

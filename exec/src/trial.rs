@@ -9,6 +9,7 @@ use crate::grasp::GraspLimits;
 use crate::interrupt::Interrupt;
 use crate::perception::{perceive, PoseNoise};
 use crate::report::{rank, Cause, Failure, Tracking, TrialReport};
+use crate::settle::check_settles;
 use crate::simulate::simulate;
 use crate::world::Physics;
 use akl_planner::{plan_task, Plan, PlanError, PlanOptions, Robot};
@@ -281,14 +282,18 @@ fn judge(setup: &Setup, obs: &crate::simulate::Observations, report: &mut TrialR
     report.simulated_seconds = obs.simulated;
 }
 
-/// The placements of a trial: the task's nominal world, or a randomized one.
+/// The placements of a trial: the task's nominal world, or a randomized one that stands still
+/// when simulated untouched with `physics` ([`crate::settle::check_settles`]; a layout that
+/// does not is redrawn like an infeasible one).
 pub fn trial_world(
     task: &Task,
     randomized: bool,
     seed: u64,
+    physics: &Physics,
 ) -> Result<World, akl_scene::SceneError> {
     if randomized {
-        akl_scene::randomize(task, seed)
+        let settles = |w: &World| check_settles(w, physics).map_err(|e| e.to_string());
+        akl_scene::randomize_layout_with(task, seed, &settles).map(|l| l.world)
     } else {
         Ok(task.world.clone())
     }

@@ -134,6 +134,10 @@ pub enum Infeasible {
     /// The teaching intent cannot be followed in the layout.
     #[error("{0}")]
     Teaching(String),
+    /// The layout does not stand still when simulated untouched (see
+    /// [`crate::randomize::randomize_layout_with`]).
+    #[error("{0}")]
+    Unsettled(String),
 }
 
 /// Checks that `task` can be done in the layout `world` (the task's world with objects moved):

@@ -31,7 +31,7 @@ pub use intent::{TeachStep, Teaching};
 pub use layout::{check_layout, Infeasible, Reach};
 pub use motion::{FixedRelation, Motion, Mover};
 pub use paths::{ObjectPaths, PathSample};
-pub use randomize::{randomize, randomize_layout, Layout};
+pub use randomize::{randomize, randomize_layout, randomize_layout_with, Layout};
 pub use range::{Groups, Range, Ranges};
 pub use shape::Shape;
 pub use task::{Task, TASK_VERSION};

@@ -34,12 +34,26 @@ pub fn randomize(task: &Task, seed: u64) -> Result<World, SceneError> {
 
 /// [`randomize`], also returning why the draws before the accepted one were rejected.
 pub fn randomize_layout(task: &Task, seed: u64) -> Result<Layout, SceneError> {
+    randomize_layout_with(task, seed, &|_| Ok(()))
+}
+
+/// [`randomize_layout`] with a further test every layout must pass, or be redrawn like an
+/// infeasible one: `accept` says why a layout is refused. The execution engine passes its
+/// check that the layout stands still when simulated untouched, which this crate, knowing no
+/// physics, cannot make.
+pub fn randomize_layout_with(
+    task: &Task,
+    seed: u64,
+    accept: &dyn Fn(&World) -> Result<(), String>,
+) -> Result<Layout, SceneError> {
     let motion = Motion::of(task)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut rejected = Vec::new();
     for _ in 0..MAX_DRAWS {
         let world = motion.draw(&task.world, &mut rng);
-        match check_layout(task, &world) {
+        match check_layout(task, &world)
+            .and_then(|()| accept(&world).map_err(Infeasible::Unsettled))
+        {
             Ok(()) => return Ok(Layout { world, rejected }),
             Err(why) => rejected.push(why),
         }
@@ -90,6 +104,38 @@ mod tests {
             redrawn > 10,
             "pick_place redraws some layouts ({redrawn} of 100)"
         );
+    }
+
+    /// A layout the further test refuses is redrawn like an infeasible one, from the same
+    /// generator, and why is kept.
+    #[test]
+    fn a_layout_the_further_test_refuses_is_redrawn() {
+        let t = builtin::task("pick_place").unwrap().unwrap();
+        let nominal = t.world.object("block_a").unwrap().pose.translation.x;
+        let refuse_right = |w: &World| {
+            let x = w.object("block_a").unwrap().pose.translation.x;
+            if x > nominal {
+                Err(format!("block_a {:.1} mm right", (x - nominal) * 1e3))
+            } else {
+                Ok(())
+            }
+        };
+        let mut refused = 0;
+        for seed in 0..20 {
+            let layout = randomize_layout_with(&t, seed, &refuse_right).unwrap();
+            assert!(layout.world.object("block_a").unwrap().pose.translation.x <= nominal);
+            refused += layout
+                .rejected
+                .iter()
+                .filter(|r| matches!(r, Infeasible::Unsettled(why) if why.contains("right")))
+                .count();
+            assert_eq!(
+                randomize_layout_with(&t, seed, &refuse_right).unwrap(),
+                layout,
+                "seed {seed}"
+            );
+        }
+        assert!(refused > 5, "{refused}");
     }
 
     #[test]

@@ -8,7 +8,6 @@ use crate::cli::CompareArgs;
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
-use akl_scene::builtin;
 use akl_stats::interval::percent;
 use akl_stats::GateOptions;
 use akl_validate::compare::{compare, CompareOptions, Row};
@@ -28,7 +27,7 @@ struct Compared {
 
 pub fn run(args: CompareArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let specs = args
         .specs
         .iter()

@@ -13,7 +13,6 @@ use crate::table::Table;
 use akl_exec::trial::ExecOptions;
 use akl_learn::calibration::Calibration;
 use akl_learn::measures::{score, Tolerance};
-use akl_scene::builtin;
 
 pub fn run(args: DemoArgs) -> CliResult {
     if args.trials == 0 {
@@ -28,7 +27,7 @@ pub fn run(args: DemoArgs) -> CliResult {
             args.out.display()
         )));
     }
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let robot = load_robot(&RobotArg { robot: None })?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::input(format!("{}: {e}", args.out.display())))?;

@@ -13,7 +13,7 @@ use akl_exec::report::{BatchReport, Cause};
 use akl_exec::trial::ExecOptions;
 use akl_planner::search::PlanBudget;
 use akl_planner::{PlanOptions, Robot};
-use akl_scene::{builtin, Task};
+use akl_scene::Task;
 use akl_stats::GateOptions;
 use akl_tsr::{FileError, TaskSpec};
 use akl_validate::grounding::GroundingOptions;
@@ -68,7 +68,7 @@ pub(crate) struct Executed {
 
 pub fn run(args: ExecuteArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let options = ExecOptions {
         plan: PlanOptions {

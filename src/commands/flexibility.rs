@@ -9,7 +9,6 @@ use akl_planner::flexibility::{
     planner_gains, FlexibilityError, Freedom, FreedomOptions, GainOptions, Gains, Workspace,
 };
 use akl_planner::{PlanBudget, PlanOptions};
-use akl_scene::builtin;
 use akl_tsr::TaskSpec;
 use serde::Serialize;
 
@@ -33,7 +32,7 @@ fn seconds(v: Option<f64>) -> String {
 
 pub fn run(args: FlexibilityArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let in_spec = |e: FlexibilityError| match e {
         FlexibilityError::Scene(_) => CliError::internal(e),

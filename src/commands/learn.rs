@@ -33,7 +33,7 @@ pub fn run(args: LearnArgs) -> CliResult {
     }
     let mut demo = read_demo(&args)?;
     let task = match &args.task {
-        Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
+        Some(name) => Some(super::load_task(name)?),
         None => builtin::task(&demo.header.task)
             .transpose()
             .map_err(CliError::internal)?,

@@ -6,7 +6,6 @@ use crate::cli::PlanArgs;
 use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
 use akl_planner::{plan_best, GripperAction, PlanBudget, PlanOptions};
-use akl_scene::builtin;
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -54,7 +53,7 @@ pub fn run(args: PlanArgs) -> CliResult {
         super::check_output(out, "plan")?;
     }
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let spec = super::load_spec_for(&args.spec, &task, args.fit)?;
     let options = PlanOptions {
         seed: args.seed,

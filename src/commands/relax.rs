@@ -7,7 +7,6 @@ use super::validate::{cli_error, exec_options, gate_options};
 use super::{check_output, load_spec_for, print_json};
 use crate::cli::RelaxArgs;
 use crate::exit::{CliError, CliResult};
-use akl_scene::builtin;
 use akl_validate::relax::{relax, Event, GateRound, Probe, RelaxOptions, Relaxation};
 use akl_validate::ValidateError;
 use serde::Serialize;
@@ -27,7 +26,7 @@ struct Relaxed<'a> {
 pub fn run(args: RelaxArgs) -> CliResult {
     check_output(&args.output, "relaxed spec")?;
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let spec = load_spec_for(&args.spec, &task, args.fit)?;
     let options = RelaxOptions {
         seed: args.seed,

@@ -38,7 +38,7 @@ struct CheckSummary {
 fn check(file: &Path, task: Option<&str>, json: bool) -> CliResult {
     let spec = load(file)?;
     let world_task = match task {
-        Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
+        Some(name) => Some(super::load_task(name)?),
         None => builtin::task(&spec.task)
             .transpose()
             .map_err(CliError::internal)?,

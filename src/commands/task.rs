@@ -26,7 +26,7 @@ struct TaskSummary {
 }
 
 fn load(name: &str) -> Result<Task, CliError> {
-    builtin::resolve(name).map_err(CliError::input)
+    super::load_task(name)
 }
 
 fn list(json: bool) -> CliResult {

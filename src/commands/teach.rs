@@ -51,7 +51,7 @@ pub fn run(args: TeachArgs) -> CliResult {
             let name = args.task.as_deref().ok_or_else(|| {
                 CliError::input("--teacher sim needs --task (a built-in task or a task file)")
             })?;
-            let task = builtin::resolve(name).map_err(CliError::input)?;
+            let task = super::load_task(name)?;
             let teaching = SimulatedTeaching {
                 task: &task,
                 profile: &args.profile,
@@ -206,7 +206,7 @@ fn teach_live(
     let at_input = |e| CliError::input(format!("standard input: {e}"));
     let start = stream.start().map_err(at_input)?;
     let task = match &args.task {
-        Some(name) => Some(builtin::resolve(name).map_err(CliError::input)?),
+        Some(name) => Some(super::load_task(name)?),
         None => builtin::task(&start.header.task)
             .transpose()
             .map_err(CliError::internal)?,

@@ -15,7 +15,7 @@ use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::{Demo, LearnOptions};
 use akl_planner::Robot;
-use akl_scene::{builtin, Task};
+use akl_scene::Task;
 use akl_stats::{Gate, GateOptions, GateVerdict};
 use akl_tsr::TaskSpec;
 use akl_validate::ablation::Ablation;
@@ -135,7 +135,7 @@ fn replay_command(args: &ValidateArgs, seed: u64) -> String {
 
 pub fn run(args: ValidateArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
-    let task = builtin::resolve(&args.task).map_err(CliError::input)?;
+    let task = super::load_task(&args.task)?;
     let spec = load_spec_for(&args.spec, &task, args.fit)?;
     for (path, what) in [(&args.report, "report"), (&args.trace, "trace")] {
         if let Some(p) = path {
