@@ -36,10 +36,6 @@ use rapier3d::prelude::{
 /// Friction of the finger pads and links (rubber-like pads).
 pub const LINK_FRICTION: f64 = 1.0;
 
-/// Joint torque limits of the Franka Emika Panda (N·m), from Franka's datasheet: 87 N·m for
-/// joints 1–4, 12 N·m for joints 5–7.
-pub const PANDA_TORQUE_LIMITS: [f64; 7] = [87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0];
-
 /// Continuous grasping force of the Franka Hand (N).
 pub const FRANKA_HAND_FORCE: f64 = 70.0;
 
@@ -53,8 +49,10 @@ pub struct Drives {
     pub frequency: f64,
     /// Damping ratio ζ of the position loop (1: critically damped).
     pub damping_ratio: f64,
-    /// Largest torque of each arm joint (N·m), in joint order; joints beyond the list use its
-    /// last value.
+    /// Largest torque of each arm joint (N·m), in joint order, overriding the robot's; joints
+    /// beyond the list use its last value. Empty (the default): each joint's `effort` limit
+    /// from the robot's URDF (for the Panda, 87 N·m for joints 1–4 and 12 N·m for 5–7, as
+    /// Franka's datasheet gives them).
     pub torque_limits: Vec<f64>,
     /// Force the hand holds a grasped object with once closed (N): what friction at the
     /// pads can carry follows from it.
@@ -63,24 +61,40 @@ pub struct Drives {
 
 impl Default for Drives {
     /// 20 Hz critically damped loops (the plan's largest joint accelerations, 7.5–20 rad/s²,
-    /// then lag by under 1.3 mrad; the loop is integrated implicitly, so stable at any step), the Panda's torque limits, the Franka Hand's 70 N.
+    /// then lag by under 1.3 mrad; the loop is integrated implicitly, so stable at any step),
+    /// the robot's own torque limits, the Franka Hand's 70 N.
     fn default() -> Self {
         Drives {
             frequency: 20.0,
             damping_ratio: 1.0,
-            torque_limits: PANDA_TORQUE_LIMITS.to_vec(),
+            torque_limits: Vec::new(),
             grasp_force: FRANKA_HAND_FORCE,
         }
     }
 }
 
 impl Drives {
-    fn torque_limit(&self, joint: usize) -> f64 {
-        self.torque_limits
-            .get(joint)
-            .or(self.torque_limits.last())
-            .copied()
-            .unwrap_or(f64::INFINITY)
+    /// The torque limit (N·m) of each of `robot`'s arm joints, in joint order: the override
+    /// list when given, else each joint's URDF `effort` (unlimited when the URDF gives none).
+    pub fn torque_limits_of(&self, robot: &Robot) -> Vec<f64> {
+        let urdf = robot.urdf();
+        robot
+            .joint_names()
+            .iter()
+            .enumerate()
+            .map(
+                |(j, name)| match self.torque_limits.get(j).or(self.torque_limits.last()) {
+                    Some(t) => *t,
+                    None => urdf
+                        .joints
+                        .iter()
+                        .find(|u| &u.name == name)
+                        .map(|u| u.limit.effort)
+                        .filter(|e| *e > 0.0)
+                        .unwrap_or(f64::INFINITY),
+                },
+            )
+            .collect()
     }
 }
 
@@ -172,6 +186,8 @@ pub struct SimArm {
     bodies: Vec<Option<RigidBodyHandle>>,
     /// Every collider of the arm, with its link index.
     colliders: Vec<(ColliderHandle, usize)>,
+    /// The pad collider of each finger, in the hand model's finger order.
+    pads: [Option<ColliderHandle>; 2],
     /// World pose of every link at the simulated joint state.
     poses: Vec<Pose>,
     q: Vec<f64>,
@@ -209,15 +225,17 @@ impl SimArm {
     ) -> Option<SimArm> {
         let hand = HandModel::new(robot)?;
         let w = 2.0 * std::f64::consts::PI * drives.frequency;
+        let torques = drives.torque_limits_of(robot);
         let accel_limits = joint_inertias(robot, robot.ready())
             .iter()
-            .enumerate()
-            .map(|(j, inertia)| drives.torque_limit(j) / inertia)
+            .zip(&torques)
+            .map(|(inertia, torque)| torque / inertia)
             .collect();
         let mut arm = SimArm {
             base,
             bodies: Vec::with_capacity(robot.links().len()),
             colliders: Vec::new(),
+            pads: [None; 2],
             poses: vec![Pose::identity(); robot.links().len()],
             q: q.to_vec(),
             qd: vec![0.0; q.len()],
@@ -236,7 +254,16 @@ impl SimArm {
         arm.compute(robot);
         for (i, link) in robot.links().iter().enumerate() {
             let shapes: Vec<(Geometry, Pose)> = if let Some(finger) = arm.hand.finger(i) {
-                vec![finger.pad.geometry()]
+                // The pad, and the finger's other elements as the URDF gives them.
+                let others = link
+                    .shapes
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != finger.pad_element)
+                    .map(|(_, s)| (s.geometry, s.origin));
+                std::iter::once(finger.pad.geometry())
+                    .chain(others)
+                    .collect()
             } else if i == arm.hand.palm_link {
                 arm.hand.palm.iter().map(LocalBox::geometry).collect()
             } else {
@@ -274,6 +301,10 @@ impl SimArm {
                     physics
                         .colliders
                         .insert_with_parent(collider, body, &mut physics.bodies);
+                // A finger's first collider is its pad.
+                if let Some(k) = arm.hand.fingers.iter().position(|f| f.link == i) {
+                    arm.pads[k].get_or_insert(handle);
+                }
                 arm.colliders.push((handle, i));
             }
             arm.bodies.push(Some(body));
@@ -406,6 +437,11 @@ impl SimArm {
     /// The hand model (pads and palm).
     pub fn hand(&self) -> &HandModel {
         &self.hand
+    }
+
+    /// The pad collider of finger `k` (in the hand model's order).
+    pub fn pad_collider(&self, k: usize) -> Option<ColliderHandle> {
+        self.pads.get(k).copied().flatten()
     }
 
     /// The rapier body of link `link`, if it has collision geometry.

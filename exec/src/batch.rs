@@ -119,7 +119,7 @@ impl<'a> Batch<'a> {
             reports,
             self.options.jobs,
             started.elapsed().as_secs_f64(),
-            settings(self.setup.options, self.setup.spec),
+            settings(self.setup.robot, self.setup.options, self.setup.spec),
         );
         report.interrupted = interrupted;
         Ok(report)
@@ -174,7 +174,7 @@ impl<'a> Batch<'a> {
 }
 
 /// The settings of a batch executing `spec` with `options`, for its report.
-pub fn settings(options: &ExecOptions, spec: &TaskSpec) -> Settings {
+pub fn settings(robot: &Robot, options: &ExecOptions, spec: &TaskSpec) -> Settings {
     let slack = options.keyframe_slack();
     Settings {
         version: env!("CARGO_PKG_VERSION").to_string(),
@@ -183,7 +183,7 @@ pub fn settings(options: &ExecOptions, spec: &TaskSpec) -> Settings {
         pose_noise_yaw: options.noise.yaw,
         servo_frequency: options.drives.frequency,
         servo_damping_ratio: options.drives.damping_ratio,
-        torque_limits: options.drives.torque_limits.clone(),
+        torque_limits: options.drives.torque_limits_of(robot),
         grasp_force: options.drives.grasp_force,
         step: options.physics.dt,
         solver_iterations: options.physics.solver_iterations,

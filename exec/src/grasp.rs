@@ -92,37 +92,32 @@ impl PadReading {
 /// What each pad touches now.
 pub fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
     let mut pads = [PadReading::NOTHING; 2];
-    for (k, finger) in arm.hand().fingers.iter().enumerate() {
-        let Some(rb) = arm
-            .body(finger.link)
-            .and_then(|b| sim.physics.bodies.get(b))
-        else {
+    for (k, reading) in pads.iter_mut().enumerate() {
+        let Some(collider) = arm.pad_collider(k) else {
             continue;
         };
-        for &collider in rb.colliders() {
-            let Some(pad) = sim.physics.colliders.get(collider) else {
+        let Some(pad) = sim.physics.colliders.get(collider) else {
+            continue;
+        };
+        for pair in sim.physics.narrow_phase.contact_pairs_with(collider) {
+            let other = if pair.collider1 == collider {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            let (Some(Owner::Object(o)), Some(c)) =
+                (sim.owner(other), sim.physics.colliders.get(other))
+            else {
                 continue;
             };
-            for pair in sim.physics.narrow_phase.contact_pairs_with(collider) {
-                let other = if pair.collider1 == collider {
-                    pair.collider2
-                } else {
-                    pair.collider1
-                };
-                let (Some(Owner::Object(o)), Some(c)) =
-                    (sim.owner(other), sim.physics.colliders.get(other))
-                else {
-                    continue;
-                };
-                pads[k].force += f64::from(pair.total_impulse_magnitude()) / sim.dt();
-                let Ok(d) = distance(pad.position(), pad.shape(), c.position(), c.shape()) else {
-                    continue;
-                };
-                let d = f64::from(d.distance);
-                if d < pads[k].gap {
-                    pads[k].gap = d;
-                    pads[k].object = Some(o);
-                }
+            reading.force += f64::from(pair.total_impulse_magnitude()) / sim.dt();
+            let Ok(d) = distance(pad.position(), pad.shape(), c.position(), c.shape()) else {
+                continue;
+            };
+            let d = f64::from(d.distance);
+            if d < reading.gap {
+                reading.gap = d;
+                reading.object = Some(o);
             }
         }
     }

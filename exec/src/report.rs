@@ -553,6 +553,7 @@ mod tests {
             2,
             1.0,
             crate::batch::settings(
+                &akl_planner::Robot::panda().unwrap(),
                 &crate::trial::ExecOptions::default(),
                 &akl_scene::builtin::task("inspection")
                     .unwrap()

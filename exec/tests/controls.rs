@@ -146,12 +146,12 @@ fn a_trials_earliest_failure_is_its_root_cause() {
 #[test]
 fn fingertips_on_the_edge_are_no_grasp() {
     let t = task("inspection");
-    // The truth's TCP is 2 cm above the part's centre, 3 cm below its top; the pads reach
-    // 1.5 cm beyond the TCP. Raise the grasp so the fingertips end 1 mm below the top, and
-    // every later keyframe by as much, so that only the grasp is wrong.
+    // The truth's TCP is 2 cm above the part's centre, 3 cm below its top; the pads (Franka's
+    // rubber tips) reach 9.5 mm beyond the TCP. Raise the grasp so the fingertips end 1 mm
+    // below the top, and every later keyframe by as much, so that only the grasp is wrong.
     let mut wrong = t.truth.clone().unwrap();
     for k in 0..wrong.keyframes.len() {
-        wrong = shifted(&wrong, k, [0.0, 0.0, 0.044]);
+        wrong = shifted(&wrong, k, [0.0, 0.0, 0.0385]);
     }
     rejected_for(&run(&t, &wrong), Cause::GraspFailed, "not held soundly");
 }

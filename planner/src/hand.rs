@@ -6,8 +6,11 @@
 //! planner kept clear (the boxes reach past the URDF's capsules at their corners). The URDF
 //! shapes fill the space between the fingers, so that planning keeps that space free.
 //! Both are derived from the URDF, so another two-finger robot works the same way:
-//! - each pad is the bounding box of its finger's URDF shapes (for the Panda, 20 × 20 × 50 mm
-//!   with its inner face on the finger's inner side);
+//! - each pad is the bounding box of the finger's URDF element that reaches furthest towards
+//!   the other finger (for the Panda, Franka's 17.5 × 15.2 × 18.5 mm rubber tip, 36–54.5 mm
+//!   along the finger, its inner face on the finger's inner side); the finger's other
+//!   elements (the Panda's screw mount, carriage sledge and diagonal finger) are simulated as
+//!   they are;
 //! - the palm is the bounding box of the hand link's URDF shapes, cut at the plane where the
 //!   finger joints sit (for the Panda, 58.4 mm below the flange).
 
@@ -67,6 +70,8 @@ pub struct Finger {
     pub link: usize,
     /// The pad, in the finger link's frame.
     pub pad: LocalBox,
+    /// Index, among the finger link's URDF elements, of the one the pad is made from.
+    pub pad_element: usize,
     /// Unit direction (finger link frame) from this pad towards the other.
     pub inward: Vector3<f64>,
 }
@@ -111,35 +116,51 @@ impl HandModel {
                 .map(|s| (s.geometry, s.origin))
                 .collect()
         };
-        let pad = |i: usize| bounds(&shapes(i)).map(|(lo, hi)| LocalBox::from_bounds(lo, hi));
-        let (pad_a, pad_b) = (pad(a)?, pad(b)?);
-        // The fingers at full opening, in the palm's frame, to find which way each faces.
+        // The fingers at full opening, in the palm's frame: the closing axis, and which way
+        // along it each finger's frame lies from the other's.
         let open = robot.open_width();
         let poses = robot.link_poses(robot.ready(), open);
         let in_palm = |i: usize| poses[palm_link].inverse() * poses[i];
-        let centre_a = in_palm(a) * akl_tsr::nalgebra::Point3::from(pad_a.centre);
-        let centre_b = in_palm(b) * akl_tsr::nalgebra::Point3::from(pad_b.centre);
         let axis = |i: usize| match links[i].motion {
             Motion::Prismatic { axis, .. } => Some(links[i].origin.rotation * axis.into_inner()),
             _ => None,
         };
         let closing = axis(a)?;
-        let inward = |i: usize,
-                      from: &akl_tsr::nalgebra::Point3<f64>,
-                      to: &akl_tsr::nalgebra::Point3<f64>| {
+        let (origin_a, origin_b) = (in_palm(a).translation.vector, in_palm(b).translation.vector);
+        let inward = |i: usize, from: &Vector3<f64>, to: &Vector3<f64>| {
             let d = (to - from).dot(&closing).signum() * closing;
             in_palm(i).rotation.inverse() * d
         };
+        let (in_a, in_b) = (
+            inward(a, &origin_a, &origin_b),
+            inward(b, &origin_b, &origin_a),
+        );
+        // The pad: the element whose bounds reach furthest inward.
+        let pad = |i: usize, inward: &Vector3<f64>| -> Option<(usize, LocalBox)> {
+            shapes(i)
+                .iter()
+                .enumerate()
+                .filter_map(|(k, s)| {
+                    let (lo, hi) = bounds(std::slice::from_ref(s))?;
+                    let b = LocalBox::from_bounds(lo, hi);
+                    Some((k, b, b.centre.dot(inward) + b.half.dot(&inward.abs())))
+                })
+                .max_by(|x, y| x.2.total_cmp(&y.2))
+                .map(|(k, b, _)| (k, b))
+        };
+        let ((element_a, pad_a), (element_b, pad_b)) = (pad(a, &in_a)?, pad(b, &in_b)?);
         let fingers = [
             Finger {
                 link: a,
                 pad: pad_a,
-                inward: inward(a, &centre_a, &centre_b),
+                pad_element: element_a,
+                inward: in_a,
             },
             Finger {
                 link: b,
                 pad: pad_b,
-                inward: inward(b, &centre_b, &centre_a),
+                pad_element: element_b,
+                inward: in_b,
             },
         ];
         // The palm ends at the plane of the finger joints.
@@ -190,13 +211,17 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let hand = HandModel::new(&robot).unwrap();
         for f in &hand.fingers {
+            // Franka's rubber tip: 17.5 × 15.2 × 18.5 mm, 36–54.5 mm along the finger, the
+            // last of the finger's four elements.
             assert!(
-                (f.pad.half - Vector3::new(0.01, 0.01, 0.025)).norm() < 1e-5,
+                (f.pad.half - Vector3::new(0.00875, 0.0076, 0.00925)).norm() < 1e-5,
                 "{f:?}"
             );
+            assert!((f.pad.centre.z - 0.04525).abs() < 1e-6, "{f:?}");
+            assert_eq!(f.pad_element, 3);
             assert!(f.inward.norm() > 0.999);
             // The inner face lies on the finger joint's axis line (the URDF finger's inner side).
-            assert!(f.face_centre().y.abs() < 1e-5, "{:?}", f.face_centre());
+            assert!(f.face_centre().y.abs() < 1e-4, "{:?}", f.face_centre());
         }
         assert!(hand.fingers[0].inward.dot(&Vector3::y()) < -0.99);
         assert!(hand.fingers[1].inward.dot(&Vector3::y()) > 0.99);

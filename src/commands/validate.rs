@@ -191,7 +191,7 @@ pub fn run(args: ValidateArgs) -> CliResult {
     let wall = started.elapsed().as_secs_f64();
     let report_file = match &args.report {
         Some(p) => {
-            let report = spec_report(&task, &spec, &options, &validation, wall);
+            let report = spec_report(&robot, &task, &spec, &options, &validation, wall);
             report
                 .save(p)
                 .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
@@ -262,6 +262,7 @@ pub fn run(args: ValidateArgs) -> CliResult {
 
 /// The spec's trials as a report in `akl execute --report`'s format, with the gate.
 fn spec_report(
+    robot: &Robot,
     task: &Task,
     spec: &TaskSpec,
     options: &ValidateOptions,
@@ -276,7 +277,7 @@ fn spec_report(
         validation.spec.reports.clone(),
         options.jobs,
         wall,
-        settings(&verifying(&options.exec), spec),
+        settings(robot, &verifying(&options.exec), spec),
     );
     report.gate = Some(GateVerdict {
         options: options.gate,
