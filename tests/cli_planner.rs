@@ -258,6 +258,7 @@ fn plan_input_errors_are_exit_code_2_and_planning_failures_exit_code_1() {
         "tasks/inspection.truth.json",
         "--task",
         "pick_place",
+        "--any-task",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(

@@ -322,6 +322,22 @@ impl Weld {
         load.force > self.force_capacity || load.torque > self.torque_capacity
     }
 
+    /// The part of `load` friction could not hold, in words: a force along the pads' faces,
+    /// or a torque about the closing axis.
+    pub fn overload_text(&self, load: &WeldLoad) -> String {
+        if load.force > self.force_capacity {
+            format!(
+                "a force of {:.0} N along the pads, more than the {:.0} N friction holds",
+                load.force, self.force_capacity
+            )
+        } else {
+            format!(
+                "a torque of {:.2} N·m about the closing axis, more than the {:.2} N·m friction holds",
+                load.torque, self.torque_capacity
+            )
+        }
+    }
+
     /// Removes the weld: the object is free and physics takes over.
     pub fn release(self, sim: &mut SimWorld) {
         sim.physics.impulse_joints.remove(self.joint, true);

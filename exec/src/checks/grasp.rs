@@ -77,6 +77,7 @@ mod tests {
             welded: unsound.is_none() && pads == [Some("part"); 2],
             squared: 0.0,
             broke_at: None,
+            broke_by: None,
             slip: 0.0,
             slipped_at: None,
             peak_load: 0.0,

@@ -11,12 +11,10 @@ pub fn check(grasps: &[GraspEvent], limit: f64) -> Vec<Failure> {
         .iter()
         .filter(|g| g.welded && g.slip > limit)
         .map(|g| {
-            let why = match g.broke_at {
-                Some(t) => format!(
-                    " after the load ({:.0} N) exceeded what friction holds at {t:.2} s",
-                    g.peak_load
-                ),
-                None => String::new(),
+            let why = match (g.broke_at, &g.broke_by) {
+                (Some(t), Some(by)) => format!(" after {by} at {t:.2} s"),
+                (Some(t), None) => format!(" after the grasp came loose at {t:.2} s"),
+                _ => String::new(),
             };
             Failure::new(
                 Cause::Slipped,
@@ -49,6 +47,9 @@ mod tests {
             welded: true,
             squared: 0.0,
             broke_at,
+            broke_by: broke_at.map(|_| {
+                "a force of 25 N along the pads, more than the 20 N friction holds".into()
+            }),
             slip,
             slipped_at,
             peak_load: 25.0,
@@ -60,7 +61,12 @@ mod tests {
         assert!(check(&[held(0.004, None, None)], 0.005).is_empty());
         let f = check(&[held(0.012, Some(2.26), Some(2.24))], 0.005);
         assert_eq!((f[0].cause, f[0].t), (Cause::Slipped, Some(2.26)));
-        assert!(f[0].detail.contains("load (25 N)"), "{}", f[0].detail);
+        assert!(
+            f[0].detail
+                .contains("after a force of 25 N along the pads, more than the 20 N"),
+            "{}",
+            f[0].detail
+        );
         let f = check(&[held(0.012, None, Some(2.24))], 0.005);
         assert_eq!(
             f[0].t,

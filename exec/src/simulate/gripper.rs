@@ -187,6 +187,7 @@ impl Gripper {
                 let load = weld.load(sim);
                 event.peak_load = event.peak_load.max(load.force);
                 if weld.overloaded(&load) {
+                    event.broke_by = Some(weld.overload_text(&load));
                     weld.release(sim);
                     h.weld = None;
                     event.broke_at = Some(t);
@@ -222,6 +223,7 @@ impl Gripper {
             welded: false,
             squared: 0.0,
             broke_at: None,
+            broke_by: None,
             slip: 0.0,
             slipped_at: None,
             peak_load: 0.0,

@@ -53,6 +53,8 @@ pub struct GraspEvent {
     pub squared: f64,
     /// When the load exceeded what friction holds and the object came loose.
     pub broke_at: Option<f64>,
+    /// What broke it, in words (the load and what friction held), when it broke.
+    pub broke_by: Option<String>,
     /// Largest displacement of the object in the hand until it was released (metres).
     pub slip: f64,
     /// When that displacement first exceeded the slip limit, if it did.
