@@ -12,16 +12,16 @@ fn truth_text() -> String {
 }
 
 #[test]
-fn task_list_shows_the_three_study_tasks() {
+fn task_list_shows_the_study_tasks_and_bottles() {
     let o = akl(&["task", "list"]);
     assert!(o.status.success());
     let out = stdout(&o);
-    for name in ["pick_place", "inspection", "assembly"] {
+    for name in ["pick_place", "inspection", "assembly", "bottles"] {
         assert!(out.contains(name), "{out}");
     }
     let o = akl(&["task", "list", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v.as_array().unwrap().len(), 3);
+    assert_eq!(v.as_array().unwrap().len(), 4);
 }
 
 #[test]

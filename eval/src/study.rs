@@ -488,7 +488,7 @@ mod tests {
     use akl_scene::builtin;
 
     fn tasks() -> Vec<Task> {
-        builtin::names()
+        builtin::study_names()
             .into_iter()
             .map(|n| builtin::resolve(n).unwrap())
             .collect()

@@ -51,6 +51,9 @@ pub fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
 /// Sides of the prism that keeps a lying cylinder from rolling.
 pub const PRISM_SIDES: usize = 24;
 
+/// How far (metres) the prism stops short of each end of the cylinder.
+const PRISM_INSET: f64 = 0.001;
+
 /// A movable cylinder as the simulation holds it: rapier's exact cylinder and a
 /// [`PRISM_SIDES`]-sided prism whose faces touch it (so both rest at the same height), with
 /// faces normal to ±x and ±y, as one compound shape along z.
@@ -69,11 +72,16 @@ fn cylinder_object(radius: f64, length: f64) -> SharedShape {
     let n = PRISM_SIDES;
     let corner = radius / (std::f64::consts::PI / n as f64).cos();
     let h = 0.5 * length;
+    // The prism stops short of the ends (see above).
+    let prism_h = (h - PRISM_INSET).max(0.5 * h);
     let points: Vec<Vector> = (0..n)
         .flat_map(|k| {
             let a = (2 * k + 1) as f64 * std::f64::consts::PI / n as f64;
             let (x, y) = ((corner * a.cos()) as f32, (corner * a.sin()) as f32);
-            [Vector::new(x, y, -h as f32), Vector::new(x, y, h as f32)]
+            [
+                Vector::new(x, y, -prism_h as f32),
+                Vector::new(x, y, prism_h as f32),
+            ]
         })
         .collect();
     let exact = SharedShape::cylinder(h as f32, radius as f32);

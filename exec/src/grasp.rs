@@ -208,16 +208,17 @@ impl GraspMeasure {
 
 /// Seats object `object` between the closed pads of `arm` as their squeeze does
 /// ([`akl_planner::squeeze`], the rule the planner's held model follows): turned about the
-/// hand's approach axis until it lies flat on the pads. Returns the turn (radians).
+/// hand's approach axis until it lies flat on the pads, and a cylinder held by its side stood
+/// up between them. Returns the turn about the approach axis (radians).
 pub fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
     let tcp = arm.tcp(sim);
     let shape = sim.template().objects[object].shape;
     let in_tcp = tcp.inverse() * sim.object_pose(object);
-    let turn = squaring_turn(&shape, &in_tcp);
-    if turn != 0.0 {
-        sim.set_object_pose(object, &(tcp * squared_in_hand(&shape, &in_tcp)));
+    let seated = squared_in_hand(&shape, &in_tcp);
+    if seated != in_tcp {
+        sim.set_object_pose(object, &(tcp * seated));
     }
-    turn
+    squaring_turn(&shape, &in_tcp)
 }
 
 /// An object welded to the hand while friction could hold it.

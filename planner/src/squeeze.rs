@@ -7,8 +7,13 @@
 //! therefore held square in the hand, not turned as it was found. The turn modelled is the one
 //! about the hand's approach axis (TCP z), through the point between the pads: it slides the
 //! object on what it rests on without lifting or sinking it when the hand comes from above.
-//! A turn about the closing axis (TCP y) is not undone (friction holds the object in it), and
-//! a tilt about the third axis is left to the support the object rests on.
+//! A turn about the closing axis (TCP y) is not undone (friction holds the object in it). A
+//! tilt about the third axis (TCP x) is undone for a cylinder the pads hold by its side with
+//! its axis along the approach (a bottle grasped from above): a pad that touches first pushes
+//! its top over, and two flat pads bear on a cylinder's side only when its axis lies in their
+//! planes, so the squeeze stands it back up (its base, which the push had tipped onto its
+//! rim, comes up off the support by a millimetre or so). For a box the pads' faces already
+//! lie flat on it after the turn about z, and the tilt is left to the support it rests on.
 //!
 //! The frame is the TCP's: the fingers close along its y axis and approach along z, as for the
 //! Franka Hand.
@@ -50,17 +55,47 @@ pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
     turn.filter(|t| t.abs() <= MAX_SQUARING).unwrap_or(0.0)
 }
 
-/// `in_tcp` turned by [`squaring_turn`] about the TCP's z axis: the pose the squeeze leaves the
-/// object at in the hand.
+/// The tilt (radians, about TCP x) that stands a cylinder held by its side, its axis along the
+/// approach, back into the pads' planes; 0 for other shapes and grasps, and when the tilt would
+/// exceed [`MAX_SQUARING`].
+pub fn straightening_tilt(shape: &Shape, in_tcp: &Pose) -> f64 {
+    let Shape::Cylinder { .. } = shape else {
+        return 0.0;
+    };
+    let d = in_tcp.rotation * Vector3::z();
+    if d.z.abs() < std::f64::consts::FRAC_1_SQRT_2 {
+        return 0.0;
+    }
+    // Rx(φ) d has no y component when tan φ = d.y / d.z.
+    let tilt = (d.y / d.z).atan();
+    if tilt.abs() <= MAX_SQUARING {
+        tilt
+    } else {
+        0.0
+    }
+}
+
+/// `in_tcp` turned by [`squaring_turn`] about the TCP's z axis and stood up by
+/// [`straightening_tilt`] about its x axis: the pose the squeeze leaves the object at in the
+/// hand.
 pub fn squared_in_hand(shape: &Shape, in_tcp: &Pose) -> Pose {
     let turn = squaring_turn(shape, in_tcp);
-    if turn == 0.0 {
-        return *in_tcp;
+    let turned = if turn == 0.0 {
+        *in_tcp
+    } else {
+        Pose::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn),
+        ) * in_tcp
+    };
+    let tilt = straightening_tilt(shape, &turned);
+    if tilt == 0.0 {
+        return turned;
     }
     Pose::from_parts(
         Default::default(),
-        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn),
-    ) * in_tcp
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), tilt),
+    ) * turned
 }
 
 /// How far (below this, radians) an axis may lean out of the pads' plane and still count as
@@ -137,6 +172,33 @@ mod tests {
                 prop_assert!((squaring_turn(&shape, &turned) + yaw).abs() < 1e-9, "{shape:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_bottle_pushed_over_by_the_first_pad_is_stood_up_between_the_pads() {
+        let bottle = Shape::Cylinder {
+            radius: 0.025,
+            length: 0.16,
+        };
+        // Grasped from above near its top: its axis along the approach, tipped towards a pad.
+        let upright = Pose::from_parts(
+            Vector3::new(0.0, 0.0, 0.055).into(),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+        );
+        let tipped = Pose::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.045),
+        ) * upright;
+        assert!((straightening_tilt(&bottle, &tipped) + 0.045).abs() < 1e-9);
+        let seated = squared_in_hand(&bottle, &tipped);
+        assert!(
+            (seated.rotation * Vector3::z()).y.abs() < 1e-9,
+            "{seated:?}"
+        );
+        assert!((seated.translation.vector - upright.translation.vector).norm() < 1e-9);
+        // A lying pipe and a box are not tilted.
+        assert_eq!(straightening_tilt(&PIPE, &pose(0.0)), 0.0);
+        assert_eq!(straightening_tilt(&BOX, &tipped), 0.0);
     }
 
     #[test]

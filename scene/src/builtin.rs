@@ -1,13 +1,13 @@
-//! The built-in tasks, modelled on the three study tasks of the thesis (§4.4), embedded in the
-//! binary so they work from any directory.
+//! The built-in tasks, embedded in the binary so they work from any directory: the three study
+//! tasks of the thesis (§4.4) and `bottles`, with round objects standing among others.
 
 use crate::error::SceneError;
 use crate::task::Task;
 use akl_tsr::TaskSpec;
 use std::path::Path;
 
-/// (name, task file, ground-truth spec) of each built-in task.
-const BUILTIN: [(&str, &str, &str); 3] = [
+/// (name, task file, ground-truth spec) of each built-in task, the study's first.
+const BUILTIN: [(&str, &str, &str); 4] = [
     (
         "pick_place",
         include_str!("../../tasks/pick_place.json"),
@@ -23,11 +23,24 @@ const BUILTIN: [(&str, &str, &str); 3] = [
         include_str!("../../tasks/assembly.json"),
         include_str!("../../tasks/assembly.truth.json"),
     ),
+    (
+        "bottles",
+        include_str!("../../tasks/bottles.json"),
+        include_str!("../../tasks/bottles.truth.json"),
+    ),
 ];
 
-/// Names of the built-in tasks, in study order.
+/// How many of the built-in tasks are the thesis's study tasks (the first ones).
+const STUDY_TASKS: usize = 3;
+
+/// Names of the built-in tasks, the study's first, in study order.
 pub fn names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(name, _, _)| *name).collect()
+}
+
+/// Names of the thesis's study tasks (§4.4), in study order: what the simulated study runs.
+pub fn study_names() -> Vec<&'static str> {
+    names().into_iter().take(STUDY_TASKS).collect()
 }
 
 /// The built-in task `name` with its ground truth, if there is one by that name.
@@ -87,8 +100,9 @@ mod tests {
     }
 
     #[test]
-    fn three_study_tasks_load_with_their_truth() {
-        assert_eq!(names(), ["pick_place", "inspection", "assembly"]);
+    fn the_study_tasks_and_bottles_load_with_their_truth() {
+        assert_eq!(names(), ["pick_place", "inspection", "assembly", "bottles"]);
+        assert_eq!(study_names(), ["pick_place", "inspection", "assembly"]);
         for t in all() {
             assert!(t.truth.is_some(), "{} has no truth", t.name);
         }

@@ -73,7 +73,7 @@ pub fn run(args: EvalArgs) -> CliResult {
     if let Some(dir) = &args.out {
         prepare_folder(dir)?;
     }
-    let tasks: Vec<Task> = builtin::names()
+    let tasks: Vec<Task> = builtin::study_names()
         .into_iter()
         .map(builtin::resolve)
         .collect::<Result<_, _>>()
