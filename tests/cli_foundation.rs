@@ -297,3 +297,42 @@ fn a_scene_that_does_not_stand_still_or_interpenetrates_is_refused_at_load() {
         stderr(&o)
     );
 }
+
+#[test]
+fn a_task_with_a_mesh_object_runs_and_a_bad_mesh_is_named() {
+    let o = akl(&["task", "show", "tasks/examples/hex_part.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("mesh hex_prism.stl (0.058×0.050×0.070)"),
+        "{}",
+        stdout(&o)
+    );
+    let o = akl(&[
+        "execute",
+        "tasks/examples/hex_part.truth.json",
+        "--task",
+        "tasks/examples/hex_part.json",
+        "--randomize",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+
+    let dir = scratch("task-bad-mesh");
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/examples/hex_part.json"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("missing.json"), &text).unwrap();
+    let o = akl(&["task", "show", dir.join("missing.json").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("world.objects[4] (part).shape")
+            && stderr(&o).contains("hex_prism.stl"),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::write(dir.join("hex_prism.stl"), "solid x\nendsolid x\n").unwrap();
+    let o = akl(&["task", "show", dir.join("missing.json").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("hex_prism.stl"), "{}", stderr(&o));
+}

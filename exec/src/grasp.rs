@@ -212,7 +212,7 @@ impl GraspMeasure {
 /// up between them. Returns the turn about the approach axis (radians).
 pub fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
     let tcp = arm.tcp(sim);
-    let shape = sim.template().objects[object].shape;
+    let shape = sim.template().objects[object].shape.clone();
     let in_tcp = tcp.inverse() * sim.object_pose(object);
     let seated = squared_in_hand(&shape, &in_tcp);
     if seated != in_tcp {

@@ -106,6 +106,8 @@ impl Primitives {
             Shape::Box { size } => self.cube(at, Vector3::from(size), rgba),
             Shape::Cylinder { radius, length } => self.cylinder(at, radius, length, rgba),
             Shape::Sphere { radius } => self.sphere(at, radius, rgba),
+            // A mesh is drawn as its bounding box.
+            Shape::Mesh { .. } => self.cube(at, 2.0 * shape.half_extents(), rgba),
         }
     }
 

@@ -153,3 +153,38 @@ fn a_cylinder_standing_over_the_shelfs_edge_falls() {
     let p = sim.object_pose(1);
     assert!(p.translation.z < TOP, "it stayed up: {:?}", p.translation);
 }
+
+/// The example task's hexagonal part (a mesh file) standing untouched at random places and
+/// turns on a shelf stays where it is put: its six-cornered base stands on all of them, not
+/// on the four parry would take along one side (see `akl_exec::convert`).
+#[test]
+fn an_untouched_mesh_part_stays_where_it_is_put() {
+    let mut part = Shape::Mesh {
+        file: "hex_prism.stl".into(),
+        hull: None,
+    };
+    part.resolve(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tasks/examples"))
+        .unwrap();
+    let half = part.half_extents();
+    let mut rng = ChaCha8Rng::seed_from_u64(22);
+    for trial in 0..100 {
+        let mut world = scene(0.02, 0.1, Pose::identity());
+        let reach = HALF - half.x - 0.01;
+        let pose = Pose::from_parts(
+            Translation3::new(
+                0.5 + rng.gen_range(-reach..reach),
+                rng.gen_range(-reach..reach),
+                TOP + half.z,
+            ),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rng.gen_range(-3.1..3.1)),
+        );
+        world.objects[1].shape = part.clone();
+        world.objects[1].pose = pose;
+        let (most, tilt, moved) = watch(&world);
+        assert!(
+            most < 0.005 && tilt < 0.002 && moved < 2e-4,
+            "trial {trial}: turned up to {most:.4} rad, by {tilt:.4} rad and {:.2} mm at the end",
+            moved * 1e3
+        );
+    }
+}

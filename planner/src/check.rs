@@ -74,7 +74,7 @@ fn held_during(world: &World, plan: &Plan, segment: &Segment, margin: f64) -> Op
         .events
         .iter()
         .rfind(|e| e.action == GripperAction::Close && e.object == *name && e.t <= segment.start)?;
-    let shape = world.object(name)?.shape;
+    let shape = world.object(name)?.shape.clone();
     Some(Held::new(name, shape, grasp.object_pose, margin))
 }
 

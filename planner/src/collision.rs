@@ -1051,7 +1051,12 @@ mod tests {
         let block = task.world.object("block_a").unwrap();
         let grasp = block.pose * pose_from_xyz_rpy([0.0, 0.0, 0.015], [PI, 0.0, 0.0]);
         let q = robot.ik(&grasp, robot.ready()).unwrap();
-        let held = Held::new("block_a", block.shape, grasp.inverse() * block.pose, 0.001);
+        let held = Held::new(
+            "block_a",
+            block.shape.clone(),
+            grasp.inverse() * block.pose,
+            0.001,
+        );
         let scene = Scene::new(&task.world, &["block_a"]);
         let checker = Checker::new(&robot, &model, &scene);
         assert_eq!(

@@ -80,6 +80,24 @@ pub fn object_shape(shape: &Shape, inflate: f64) -> (SharedShape, Pose) {
             (s, cylinder_axis())
         }
         Shape::Sphere { radius } => (SharedShape::ball(radius as f32 + m), Pose::identity()),
+        Shape::Mesh { ref hull, .. } => {
+            let points: Vec<Vector> = hull
+                .iter()
+                .flat_map(|h| h.vertices.iter())
+                .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+                .collect();
+            let made = if m > 0.0 {
+                SharedShape::round_convex_hull(&points, m)
+            } else {
+                SharedShape::convex_hull(&points)
+            };
+            // A mesh whose hull was measured when the task was loaded always has one; an
+            // unread one (refused by task validation) is a point.
+            (
+                made.unwrap_or_else(|| SharedShape::ball(m)),
+                Pose::identity(),
+            )
+        }
     }
 }
 

@@ -34,7 +34,8 @@ pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
     let r = in_tcp.rotation.to_rotation_matrix();
     let axis = |k: usize| -> Vector3<f64> { r.matrix().column(k).into_owned() };
     let turn = match shape {
-        Shape::Sphere { .. } => None,
+        // A mesh is held as it was grasped: which of its faces the pads bear on is not known.
+        Shape::Sphere { .. } | Shape::Mesh { .. } => None,
         Shape::Box { .. } => {
             let facing = (0..3)
                 .map(axis)

@@ -259,6 +259,13 @@ fn grasp_width(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
             u.z.abs() * length + 2.0 * radius * (1.0 - u.z * u.z).max(0.0).sqrt()
         }
         Shape::Sphere { radius } => 2.0 * radius,
+        Shape::Mesh { ref hull, .. } => hull.as_ref().map_or(0.0, |h| {
+            let along = h.vertices.iter().map(|v| v.coords.dot(&u));
+            let (lo, hi) = along.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                (lo.min(d), hi.max(d))
+            });
+            hi - lo
+        }),
     }
 }
 
@@ -816,7 +823,7 @@ impl<'a> Planner<'a> {
                     .ok_or_else(|| format!("no object `{object}`"))?;
                 let held = Held::new(
                     object,
-                    o.shape,
+                    o.shape.clone(),
                     centred_in_hand(pose, &o.pose, &o.shape),
                     self.model.margins().held,
                 );
@@ -887,7 +894,7 @@ impl<'a> Planner<'a> {
             holding = Some(Holding {
                 held: Held::new(
                     object,
-                    o.shape,
+                    o.shape.clone(),
                     centred_in_hand(pose, &o.pose, &o.shape),
                     self.model.margins().held,
                 ),

@@ -1,11 +1,13 @@
-//! Primitive object shapes.
+//! Object shapes: primitives, and convex objects given as a mesh file.
 
+use akl_mesh::ConvexHull;
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
-/// A primitive shape in its object's frame, centred on the frame origin.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A shape in its object's frame, centred on the frame origin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Shape {
     /// A box with full side lengths along the frame's x, y and z axes (metres).
@@ -25,6 +27,16 @@ pub enum Shape {
         /// Radius (metres).
         radius: f64,
     },
+    /// A convex object given as a mesh file (STL, OBJ or COLLADA, in metres): the convex hull
+    /// of its vertices, centred on the middle of its bounding box (the object's pose places
+    /// that middle), with its own volume and centre of mass.
+    Mesh {
+        /// The file, relative to the task file's folder (or absolute).
+        file: String,
+        /// Its convex hull; read when the task file is loaded ([`Shape::resolve`]).
+        #[serde(skip)]
+        hull: Option<Arc<ConvexHull>>,
+    },
 }
 
 impl Shape {
@@ -34,7 +46,29 @@ impl Shape {
             Shape::Box { size } => Vector3::new(size[0], size[1], size[2]) * 0.5,
             Shape::Cylinder { radius, length } => Vector3::new(radius, radius, 0.5 * length),
             Shape::Sphere { radius } => Vector3::repeat(radius),
+            Shape::Mesh { ref hull, .. } => {
+                hull.as_ref().map_or(Vector3::zeros(), |h| h.half_extents)
+            }
         }
+    }
+
+    /// The convex hull of a mesh shape (`None` for the primitives, and for a mesh not yet
+    /// read).
+    pub fn hull(&self) -> Option<&ConvexHull> {
+        match self {
+            Shape::Mesh { hull, .. } => hull.as_deref(),
+            _ => None,
+        }
+    }
+
+    /// Reads a mesh shape's file, relative to `folder` (the task file's), and keeps its hull;
+    /// nothing for the primitives. Errors name the file.
+    pub fn resolve(&mut self, folder: &std::path::Path) -> Result<(), akl_mesh::MeshError> {
+        if let Shape::Mesh { file, hull } = self {
+            let path = folder.join(file.as_str());
+            *hull = Some(Arc::new(ConvexHull::from_file(&path)?));
+        }
+        Ok(())
     }
 
     /// Half extents of the tightest world-axis-aligned box around the shape at `pose`.
@@ -48,6 +82,14 @@ impl Shape {
                 0.5 * length * axis + radius * (1.0 - axis * axis).max(0.0).sqrt()
             }),
             Shape::Sphere { radius } => Vector3::repeat(radius),
+            Shape::Mesh { ref hull, .. } => {
+                let rotation = pose.rotation;
+                hull.as_ref().map_or(Vector3::zeros(), |h| {
+                    h.vertices
+                        .iter()
+                        .fold(Vector3::zeros(), |m, v| m.sup(&(rotation * v.coords).abs()))
+                })
+            }
         }
     }
 
@@ -67,6 +109,7 @@ impl Shape {
             Shape::Box { size } => size[0] * size[1] * size[2],
             Shape::Cylinder { radius, length } => std::f64::consts::PI * radius * radius * length,
             Shape::Sphere { radius } => 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3),
+            Shape::Mesh { ref hull, .. } => hull.as_ref().map_or(0.0, |h| h.volume),
         }
     }
 
@@ -84,6 +127,9 @@ impl Shape {
         match *self {
             Shape::Box { size } => (x.abs() - 0.5 * size[0]).max(y.abs() - 0.5 * size[1]),
             Shape::Cylinder { radius, .. } | Shape::Sphere { radius } => x.hypot(y) - radius,
+            Shape::Mesh { ref hull, .. } => hull
+                .as_ref()
+                .map_or(x.hypot(y), |h| polygon_excess(&h.outline, x, y)),
         }
     }
 
@@ -126,6 +172,14 @@ impl Shape {
             ],
             Shape::Cylinder { radius, length } => vec![("radius", radius), ("length", length)],
             Shape::Sphere { radius } => vec![("radius", radius)],
+            Shape::Mesh { ref file, ref hull } => {
+                if hull.is_none() {
+                    return Err(format!(
+                        "mesh `{file}` was not read: a task with mesh shapes is loaded from its file, which the mesh's path is relative to"
+                    ));
+                }
+                Vec::new()
+            }
         };
         for (name, v) in values {
             if !v.is_finite() || v <= 0.0 {
@@ -141,15 +195,37 @@ impl Shape {
             Shape::Box { size } => format!("box {}×{}×{}", size[0], size[1], size[2]),
             Shape::Cylinder { radius, length } => format!("cylinder r {radius} × {length}"),
             Shape::Sphere { radius } => format!("sphere r {radius}"),
+            Shape::Mesh { ref file, ref hull } => {
+                let h = self.half_extents() * 2.0;
+                match hull {
+                    Some(_) => format!("mesh {file} ({:.3}×{:.3}×{:.3})", h.x, h.y, h.z),
+                    None => format!("mesh {file}"),
+                }
+            }
         }
     }
+}
+
+/// How far the point (x, y) lies outside the convex, counter-clockwise `polygon`: the largest
+/// signed distance to its edges' lines (negative inside), as a box's excess is the larger of
+/// its axes'.
+fn polygon_excess(polygon: &[[f64; 2]], x: f64, y: f64) -> f64 {
+    (0..polygon.len())
+        .map(|i| {
+            let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
+            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+            let length = ex.hypot(ey).max(f64::MIN_POSITIVE);
+            // Outward normal of a counter-clockwise edge: (ey, -ex).
+            ((x - a[0]) * ey - (y - a[1]) * ex) / length
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use akl_tsr::pose::pose_from_xyz_rpy;
-    use std::f64::consts::FRAC_PI_2;
+    use std::f64::consts::{FRAC_PI_2, PI};
 
     #[test]
     fn a_cylinder_on_its_side_is_as_tall_as_its_diameter() {
@@ -198,6 +274,61 @@ mod tests {
             (disc.overhang(&origin, &block, &at(0.0, 0.0)) - (0.025 * 2f64.sqrt() - 0.1)).abs()
                 < 1e-12
         );
+    }
+
+    /// A hexagonal prism (circumradius `r`, height `h`) as a mesh shape, its points lifted
+    /// off their origin as a file's may be.
+    fn hexagonal_prism(r: f64, h: f64) -> Shape {
+        let points: Vec<Point3<f64>> = (0..6)
+            .flat_map(|k| {
+                let a = f64::from(k) * std::f64::consts::FRAC_PI_3;
+                [0.0, h].map(|z| Point3::new(r * a.cos(), r * a.sin(), z + 0.3))
+            })
+            .collect();
+        let hull = ConvexHull::of(&points, std::path::Path::new("hex.stl")).unwrap();
+        Shape::Mesh {
+            file: "hex.stl".into(),
+            hull: Some(Arc::new(hull)),
+        }
+    }
+
+    #[test]
+    fn a_mesh_is_its_centred_hull() {
+        let (r, h) = (0.03, 0.07);
+        let hex = hexagonal_prism(r, h);
+        let apothem = r * 3f64.sqrt() / 2.0;
+        assert!((hex.half_extents() - Vector3::new(r, apothem, h / 2.0)).norm() < 1e-6);
+        let area = 1.5 * 3f64.sqrt() * r * r;
+        assert!((hex.volume() - area * h).abs() < 1e-7, "{}", hex.volume());
+        // Seen from above: inside by the apothem at the centre; beyond a corner by the
+        // distance to its edges' lines (as a box's excess is the larger axis one).
+        assert!((hex.outline_excess(0.0, 0.0) + apothem).abs() < 1e-6);
+        assert!((hex.outline_excess(r + 0.01, 0.0) - 0.01 * (PI / 6.0).cos()).abs() < 1e-6);
+        assert!(hex.outline_excess(0.0, apothem - 0.001) < 0.0);
+        // Standing, its lowest point is half its height below its pose; turned on its side,
+        // its circumradius.
+        let on_side = pose_from_xyz_rpy([0.0, 0.0, 0.0], [FRAC_PI_2, 0.0, 0.0]);
+        assert!((hex.world_half_extents(&on_side).z - apothem).abs() < 1e-6);
+        assert!(hex.validate().is_ok());
+        assert!(hex.describe().contains("hex.stl"));
+    }
+
+    #[test]
+    fn an_unread_mesh_is_refused_and_a_missing_file_named() {
+        let mut unread = Shape::Mesh {
+            file: "part.stl".into(),
+            hull: None,
+        };
+        let e = unread.validate().unwrap_err();
+        assert!(
+            e.contains("part.stl") && e.contains("loaded from its file"),
+            "{e}"
+        );
+        let e = unread
+            .resolve(std::path::Path::new("no/such/folder"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no/such/folder/part.stl"), "{e}");
     }
 
     #[test]

@@ -58,8 +58,16 @@ struct VersionProbe {
 }
 
 impl Task {
-    /// Parses and validates a task from JSON text (without its ground truth).
+    /// Parses and validates a task from JSON text (without its ground truth). Mesh shapes
+    /// need the task's file to find theirs: see [`Task::load`].
     pub fn from_json(text: &str) -> Result<Self, SceneError> {
+        let task = Self::parse(text)?;
+        task.validate()?;
+        Ok(task)
+    }
+
+    /// Parses a task from JSON text, checking its version, without validating it.
+    fn parse(text: &str) -> Result<Self, SceneError> {
         let probe: VersionProbe =
             serde_json::from_str(text).map_err(|e| SceneError::from_json(&e, text))?;
         match probe.akl_task {
@@ -71,19 +79,28 @@ impl Task {
                 })
             }
         }
-        let task: Task = serde_json::from_str(text).map_err(|e| SceneError::from_json(&e, text))?;
-        task.validate()?;
-        Ok(task)
+        serde_json::from_str(text).map_err(|e| SceneError::from_json(&e, text))
     }
 
-    /// Loads a task file and, if present, the ground truth beside it; errors name the file.
+    /// Loads a task file, the mesh files its shapes name (relative to the task file's folder)
+    /// and, if present, the ground truth beside it; errors name the file.
     pub fn load(path: &Path) -> Result<Self, FileError<SceneError>> {
         let wrap = |source| FileError {
             path: path.to_path_buf(),
             source,
         };
         let text = std::fs::read_to_string(path).map_err(|e| wrap(SceneError::Io(e)))?;
-        let mut task = Self::from_json(&text).map_err(wrap)?;
+        let mut task = Self::parse(&text).map_err(wrap)?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        for (i, o) in task.world.objects.iter_mut().enumerate() {
+            o.shape.resolve(folder).map_err(|e| {
+                wrap(SceneError::invalid(
+                    format!("world.objects[{i}] ({}).shape", o.name),
+                    e.to_string(),
+                ))
+            })?;
+        }
+        task.validate().map_err(wrap)?;
         let truth_path = truth_path_for(path);
         if truth_path.exists() {
             let truth = TaskSpec::load(&truth_path).map_err(|e| wrap(SceneError::Truth(e)))?;

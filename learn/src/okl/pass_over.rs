@@ -128,6 +128,34 @@ fn outline_interval(shape: &Shape, a: Vector2<f64>, b: Vector2<f64>) -> Option<(
             let root = disc.sqrt();
             ((-half_b - root).max(0.0), (-half_b + root).min(1.0))
         }
+        Shape::Mesh { ref hull, .. } => {
+            // The segment clipped by each edge of the convex outline (counter-clockwise).
+            let outline = hull.as_ref().map_or(&[][..], |h| &h.outline[..]);
+            let mut range = (0.0f64, 1.0f64);
+            for (i, p) in outline.iter().enumerate() {
+                let q = outline[(i + 1) % outline.len()];
+                let normal = Vector2::new(q[1] - p[1], p[0] - q[0]);
+                // Inside where (a + t·d − p)·normal ≤ 0.
+                let at = (a - Vector2::new(p[0], p[1])).dot(&normal);
+                let rate = d.dot(&normal);
+                if rate.abs() < 1e-15 {
+                    if at > 0.0 {
+                        return None;
+                    }
+                    continue;
+                }
+                let t = -at / rate;
+                if rate > 0.0 {
+                    range.1 = range.1.min(t);
+                } else {
+                    range.0 = range.0.max(t);
+                }
+            }
+            if outline.len() < 3 {
+                return None;
+            }
+            range
+        }
     };
     (s0 <= s1).then_some((s0, s1))
 }

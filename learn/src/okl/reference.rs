@@ -81,7 +81,7 @@ pub fn scene_objects<'a>(demo: &'a Demo, world: Option<&World>) -> Vec<SceneObje
             SceneObject {
                 name: t.name.clone(),
                 poses: Cow::Borrowed(&t.poses),
-                shape: known.map(|o| o.shape),
+                shape: known.map(|o| o.shape.clone()),
                 movable: known.map(|o| o.movable),
             }
         })
@@ -92,7 +92,7 @@ pub fn scene_objects<'a>(demo: &'a Demo, world: Option<&World>) -> Vec<SceneObje
                 out.push(SceneObject {
                     name: o.name.clone(),
                     poses: Cow::Owned(vec![o.pose]),
-                    shape: Some(o.shape),
+                    shape: Some(o.shape.clone()),
                     movable: Some(o.movable),
                 });
             }

@@ -45,6 +45,13 @@ pub fn shape_contains(shape: &Shape, pose: &Pose, p: &Vector3<f64>) -> bool {
             local.z.abs() <= 0.5 * length && local.xy().norm() <= radius
         }
         Shape::Sphere { radius } => local.norm() <= radius,
+        Shape::Mesh { ref hull, .. } => hull.as_ref().is_some_and(|h| {
+            // Inside every face's plane (faces counter-clockwise from outside).
+            h.triangles.iter().all(|t| {
+                let [a, b, c] = t.map(|i| h.vertices[i as usize].coords);
+                (local - a).dot(&(b - a).cross(&(c - a))) <= 0.0
+            })
+        }),
     }
 }
 

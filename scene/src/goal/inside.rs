@@ -12,7 +12,7 @@ pub(super) fn validate(
     axis: &[[f64; 3]; 2],
     max_offset: f64,
 ) -> Result<(), (String, String)> {
-    if let Some(Shape::Sphere { .. }) = world.object(object).map(|o| o.shape) {
+    if let Some(Shape::Sphere { .. }) = world.object(object).map(|o| &o.shape) {
         return Err((
             "object".into(),
             format!("`{object}` is a sphere, which has no axis; inside needs a cylinder or box"),

@@ -106,7 +106,7 @@ fn visible_rotation(shape: &Shape, a: &Pose, b: &Pose) -> f64 {
             let zb = b.rotation * Vector3::z();
             za.dot(&zb).clamp(-1.0, 1.0).acos()
         }
-        Shape::Box { .. } => a.rotation.angle_to(&b.rotation),
+        Shape::Box { .. } | Shape::Mesh { .. } => a.rotation.angle_to(&b.rotation),
     }
 }
 
