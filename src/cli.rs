@@ -226,9 +226,9 @@ pub struct EvalArgs {
 #[derive(Debug, Clone, Copy, clap::Args)]
 pub struct SpeedArg {
     /// How fast the arm may move, in (0, 1]: joint velocity limits times S, accelerations
-    /// times S² (MoveIt's scaling factors S and S²), fingers at S times their speed, so every
-    /// motion takes 1/S as long. 1 (the default) moves as fast as the robot allows. Recorded
-    /// in reports.
+    /// times S² (MoveIt's scaling factors S and S²), fingers at S times their speed, the pause
+    /// after the gripper 1/S as long: the whole plan takes 1/S as long. 1 (the default) moves
+    /// as fast as the robot allows. Recorded in reports.
     #[arg(long, value_name = "S", default_value_t = 1.0, value_parser = parse_speed_scale)]
     pub speed_scale: f64,
 }

@@ -81,8 +81,10 @@ pub struct PlanOptions {
     /// played 1/S times as long (MoveIt's velocity scaling factor S with its acceleration
     /// scaling factor S²; with S for both, as MoveIt users often set them, a short move limited
     /// by acceleration would only take 1/√S as long, and "half speed" would not halve the
-    /// speed). The fingers, joints too, move at S times their speed. The paths are the same;
-    /// only their timing changes (the pause after each gripper motion stays).
+    /// speed). The fingers, joints too, move at S times their speed, and the pause after each
+    /// gripper motion, which lets a closing that pushed the object first finish, is 1/S times
+    /// as long. The paths are the same; only their timing changes: the whole plan is played
+    /// 1/S times as long.
     pub speed_scale: f64,
 }
 
@@ -970,7 +972,7 @@ impl<'a> Planner<'a> {
             i,
             vec![q],
             Timing::Hold {
-                duration: travel + self.options.gripper_settle,
+                duration: travel + self.options.gripper_settle / self.options.speed_scale,
             },
             None,
             allowed,
