@@ -44,6 +44,9 @@ pub fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
         Shape::Cylinder { radius, length } => {
             ColliderBuilder::new(cylinder_object(radius, length)).position(to_sim(origin))
         }
+        Shape::Capsule { radius, length } => {
+            ColliderBuilder::new(capsule_object(radius, length)).position(to_sim(origin))
+        }
         Shape::Sphere { radius } => ColliderBuilder::ball(radius as f32).position(to_sim(origin)),
         Shape::Mesh { .. } => ColliderBuilder::new(mesh_object(shape)).position(to_sim(origin)),
     }
@@ -98,6 +101,20 @@ pub const PRISM_SIDES: usize = 24;
 /// How far (metres) the prism stops short of each end of the cylinder.
 const PRISM_INSET: f64 = 0.001;
 
+/// A movable capsule as the simulation holds it: rapier's capsule, and over its cylindrical
+/// part the prism of [`cylinder_object`], which keeps it from rolling when it lies (a capsule
+/// touches a flat support along a line, as a cylinder does; standing on a round end, it falls,
+/// as it should).
+fn capsule_object(radius: f64, length: f64) -> SharedShape {
+    let capsule = SharedShape::capsule_z(0.5 * length as f32, radius as f32);
+    match prism(radius, length).filter(|_| length > 2.0 * PRISM_INSET) {
+        Some(p) => {
+            SharedShape::compound(vec![(SimPose::IDENTITY, capsule), (SimPose::IDENTITY, p)])
+        }
+        None => capsule,
+    }
+}
+
 /// A movable cylinder as the simulation holds it: rapier's exact cylinder and a
 /// [`PRISM_SIDES`]-sided prism whose faces touch it (so both rest at the same height), with
 /// faces normal to ±x and ±y, as one compound shape along z.
@@ -113,10 +130,19 @@ const PRISM_INSET: f64 = 0.001;
 /// face gives four points spread round its rim. Together, standing, the cylinder's points
 /// carry it; lying, the prism's face does.
 fn cylinder_object(radius: f64, length: f64) -> SharedShape {
+    let exact = SharedShape::cylinder(0.5 * length as f32, radius as f32);
+    let along_z = to_sim(&cylinder_axis());
+    let mut parts = vec![(along_z, exact)];
+    parts.extend(prism(radius, length).map(|p| (SimPose::IDENTITY, p)));
+    SharedShape::compound(parts)
+}
+
+/// The [`PRISM_SIDES`]-sided prism along z whose faces touch a cylinder of `radius`, stopping
+/// [`PRISM_INSET`] short of the ends of a cylinder of `length` (`None` if parry cannot make it).
+fn prism(radius: f64, length: f64) -> Option<SharedShape> {
     let n = PRISM_SIDES;
     let corner = radius / (std::f64::consts::PI / n as f64).cos();
     let h = 0.5 * length;
-    // The prism stops short of the ends (see above).
     let prism_h = (h - PRISM_INSET).max(0.5 * h);
     let points: Vec<Vector> = (0..n)
         .flat_map(|k| {
@@ -128,12 +154,7 @@ fn cylinder_object(radius: f64, length: f64) -> SharedShape {
             ]
         })
         .collect();
-    let exact = SharedShape::cylinder(h as f32, radius as f32);
-    let along_z = to_sim(&cylinder_axis());
-    match SharedShape::convex_hull(&points) {
-        Some(prism) => SharedShape::compound(vec![(SimPose::IDENTITY, prism), (along_z, exact)]),
-        None => SharedShape::compound(vec![(along_z, exact)]),
-    }
+    SharedShape::convex_hull(&points)
 }
 
 /// A collider for one collision element of a robot link, placed at `origin` in the link frame.

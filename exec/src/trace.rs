@@ -105,6 +105,12 @@ impl Primitives {
         match *shape {
             Shape::Box { size } => self.cube(at, Vector3::from(size), rgba),
             Shape::Cylinder { radius, length } => self.cylinder(at, radius, length, rgba),
+            Shape::Capsule { radius, length } => {
+                self.cylinder(at, radius, length, rgba);
+                for end in [-0.5 * length, 0.5 * length] {
+                    self.sphere(&(at * Pose::translation(0.0, 0.0, end)), radius, rgba);
+                }
+            }
             Shape::Sphere { radius } => self.sphere(at, radius, rgba),
             // A mesh is drawn as its bounding box.
             Shape::Mesh { .. } => self.cube(at, 2.0 * shape.half_extents(), rgba),

@@ -188,3 +188,40 @@ fn an_untouched_mesh_part_stays_where_it_is_put() {
         );
     }
 }
+
+/// Lying capsules stay where they are put (the prism over their cylindrical part keeps them
+/// from rolling), and one stood on its round end falls, as it must.
+#[test]
+fn lying_capsules_stay_and_a_standing_one_falls() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    for (radius, length) in [(0.02, 0.08), (0.03, 0.15)] {
+        for trial in 0..50 {
+            let mut pose = placed(&mut rng, radius, length + 2.0 * radius, true);
+            pose.translation.z = TOP + radius;
+            let mut world = scene(radius, length, pose);
+            world.objects[1].shape = Shape::Capsule { radius, length };
+            let (most, tilt, moved) = watch(&world);
+            assert!(
+                most < 0.05 && tilt < 0.005 && moved < 1e-3,
+                "capsule r {radius} × {length} (trial {trial}): turned up to {most:.4} rad, by {tilt:.4} rad and {:.2} mm at the end",
+                moved * 1e3
+            );
+        }
+    }
+    let (radius, length) = (0.02, 0.1);
+    let standing = Pose::from_parts(
+        Translation3::new(0.5, 0.0, TOP + 0.5 * length + radius),
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 0.01),
+    );
+    let mut world = scene(radius, length, standing);
+    world.objects[1].shape = Shape::Capsule { radius, length };
+    let mut sim = SimWorld::new(&world, &Physics::default());
+    while sim.time() < WATCHED {
+        sim.step();
+    }
+    let upright = (sim.object_pose(1).rotation * Vector3::z()).angle(&Vector3::z());
+    assert!(
+        upright > 1.0,
+        "the standing capsule ends {upright:.3} rad from upright"
+    );
+}

@@ -79,6 +79,10 @@ pub fn object_shape(shape: &Shape, inflate: f64) -> (SharedShape, Pose) {
             };
             (s, cylinder_axis())
         }
+        Shape::Capsule { radius, length } => (
+            SharedShape::capsule_z(0.5 * length as f32, radius as f32 + m),
+            Pose::identity(),
+        ),
         Shape::Sphere { radius } => (SharedShape::ball(radius as f32 + m), Pose::identity()),
         Shape::Mesh { ref hull, .. } => {
             let points: Vec<Vector> = hull

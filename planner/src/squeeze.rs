@@ -43,7 +43,7 @@ pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
                 .unwrap_or_else(Vector3::y);
             face_onto_pads(&facing)
         }
-        Shape::Cylinder { .. } => {
+        Shape::Cylinder { .. } | Shape::Capsule { .. } => {
             let d = axis(2);
             if d.y.abs() >= std::f64::consts::FRAC_1_SQRT_2 {
                 // The pads bear on the end faces.
@@ -60,7 +60,7 @@ pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
 /// approach, back into the pads' planes; 0 for other shapes and grasps, and when the tilt would
 /// exceed [`MAX_SQUARING`].
 pub fn straightening_tilt(shape: &Shape, in_tcp: &Pose) -> f64 {
-    let Shape::Cylinder { .. } = shape else {
+    let (Shape::Cylinder { .. } | Shape::Capsule { .. }) = shape else {
         return 0.0;
     };
     let d = in_tcp.rotation * Vector3::z();

@@ -260,6 +260,7 @@ fn grasp_width(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
         Shape::Cylinder { radius, length } => {
             u.z.abs() * length + 2.0 * radius * (1.0 - u.z * u.z).max(0.0).sqrt()
         }
+        Shape::Capsule { radius, length } => u.z.abs() * length + 2.0 * radius,
         Shape::Sphere { radius } => 2.0 * radius,
         Shape::Mesh { ref hull, .. } => hull.as_ref().map_or(0.0, |h| {
             let along = h.vertices.iter().map(|v| v.coords.dot(&u));

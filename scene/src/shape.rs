@@ -22,6 +22,14 @@ pub enum Shape {
         /// Length along z (metres).
         length: f64,
     },
+    /// A capsule: a cylinder of `length` along the frame's z axis with a hemisphere of its
+    /// radius on each end (as in URDF; `length` excludes the ends).
+    Capsule {
+        /// Radius (metres).
+        radius: f64,
+        /// Length of the cylindrical part along z (metres).
+        length: f64,
+    },
     /// A sphere.
     Sphere {
         /// Radius (metres).
@@ -45,6 +53,9 @@ impl Shape {
         match *self {
             Shape::Box { size } => Vector3::new(size[0], size[1], size[2]) * 0.5,
             Shape::Cylinder { radius, length } => Vector3::new(radius, radius, 0.5 * length),
+            Shape::Capsule { radius, length } => {
+                Vector3::new(radius, radius, 0.5 * length + radius)
+            }
             Shape::Sphere { radius } => Vector3::repeat(radius),
             Shape::Mesh { ref hull, .. } => {
                 hull.as_ref().map_or(Vector3::zeros(), |h| h.half_extents)
@@ -81,6 +92,9 @@ impl Shape {
                 let axis = m[(i, 2)].abs();
                 0.5 * length * axis + radius * (1.0 - axis * axis).max(0.0).sqrt()
             }),
+            Shape::Capsule { radius, length } => {
+                Vector3::from_fn(|i, _| 0.5 * length * m[(i, 2)].abs() + radius)
+            }
             Shape::Sphere { radius } => Vector3::repeat(radius),
             Shape::Mesh { ref hull, .. } => {
                 let rotation = pose.rotation;
@@ -108,6 +122,9 @@ impl Shape {
         match *self {
             Shape::Box { size } => size[0] * size[1] * size[2],
             Shape::Cylinder { radius, length } => std::f64::consts::PI * radius * radius * length,
+            Shape::Capsule { radius, length } => {
+                std::f64::consts::PI * radius * radius * (length + 4.0 / 3.0 * radius)
+            }
             Shape::Sphere { radius } => 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3),
             Shape::Mesh { ref hull, .. } => hull.as_ref().map_or(0.0, |h| h.volume),
         }
@@ -126,7 +143,9 @@ impl Shape {
     pub fn outline_excess(&self, x: f64, y: f64) -> f64 {
         match *self {
             Shape::Box { size } => (x.abs() - 0.5 * size[0]).max(y.abs() - 0.5 * size[1]),
-            Shape::Cylinder { radius, .. } | Shape::Sphere { radius } => x.hypot(y) - radius,
+            Shape::Cylinder { radius, .. }
+            | Shape::Capsule { radius, .. }
+            | Shape::Sphere { radius } => x.hypot(y) - radius,
             Shape::Mesh { ref hull, .. } => hull
                 .as_ref()
                 .map_or(x.hypot(y), |h| polygon_excess(&h.outline, x, y)),
@@ -171,6 +190,12 @@ impl Shape {
                 ("size z", size[2]),
             ],
             Shape::Cylinder { radius, length } => vec![("radius", radius), ("length", length)],
+            Shape::Capsule { radius, length } => {
+                if !length.is_finite() || length < 0.0 {
+                    return Err(format!("length must be a finite length >= 0, got {length}"));
+                }
+                vec![("radius", radius)]
+            }
             Shape::Sphere { radius } => vec![("radius", radius)],
             Shape::Mesh { ref file, ref hull } => {
                 if hull.is_none() {
@@ -194,6 +219,7 @@ impl Shape {
         match *self {
             Shape::Box { size } => format!("box {}×{}×{}", size[0], size[1], size[2]),
             Shape::Cylinder { radius, length } => format!("cylinder r {radius} × {length}"),
+            Shape::Capsule { radius, length } => format!("capsule r {radius} × {length}"),
             Shape::Sphere { radius } => format!("sphere r {radius}"),
             Shape::Mesh { ref file, ref hull } => {
                 let h = self.half_extents() * 2.0;
@@ -237,6 +263,29 @@ mod tests {
         let h = c.world_half_extents(&lying);
         assert!((h.z - 0.02).abs() < 1e-12 && (h.x - 0.15).abs() < 1e-12);
         assert!(c.bottom(&lying).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_capsule_reaches_its_radius_beyond_its_length() {
+        let c = Shape::Capsule {
+            radius: 0.02,
+            length: 0.1,
+        };
+        assert!((c.half_extents() - Vector3::new(0.02, 0.02, 0.07)).norm() < 1e-12);
+        let lying = pose_from_xyz_rpy([0.0, 0.0, 0.02], [0.0, FRAC_PI_2, 0.0]);
+        let h = c.world_half_extents(&lying);
+        assert!(
+            (h.z - 0.02).abs() < 1e-12 && (h.x - 0.07).abs() < 1e-12,
+            "{h}"
+        );
+        let v = PI * 0.02f64.powi(2) * 0.1 + 4.0 / 3.0 * PI * 0.02f64.powi(3);
+        assert!((c.volume() - v).abs() < 1e-15);
+        assert!(Shape::Capsule {
+            radius: 0.02,
+            length: -1.0
+        }
+        .validate()
+        .is_err());
     }
 
     #[test]

@@ -113,7 +113,9 @@ fn outline_interval(shape: &Shape, a: Vector2<f64>, b: Vector2<f64>) -> Option<(
             }
             range
         }
-        Shape::Cylinder { radius, .. } | Shape::Sphere { radius } => {
+        Shape::Cylinder { radius, .. }
+        | Shape::Capsule { radius, .. }
+        | Shape::Sphere { radius } => {
             let dd = d.norm_squared();
             if dd < 1e-24 {
                 return (a.norm() <= radius).then_some((0.0, 1.0));

@@ -44,6 +44,10 @@ pub fn shape_contains(shape: &Shape, pose: &Pose, p: &Vector3<f64>) -> bool {
         Shape::Cylinder { radius, length } => {
             local.z.abs() <= 0.5 * length && local.xy().norm() <= radius
         }
+        Shape::Capsule { radius, length } => {
+            let along = local.z.clamp(-0.5 * length, 0.5 * length);
+            (local - Vector3::new(0.0, 0.0, along)).norm() <= radius
+        }
         Shape::Sphere { radius } => local.norm() <= radius,
         Shape::Mesh { ref hull, .. } => hull.as_ref().is_some_and(|h| {
             // Inside every face's plane (faces counter-clockwise from outside).

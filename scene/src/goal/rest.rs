@@ -101,7 +101,7 @@ fn tilt_from(nominal: &Pose, now: &Pose) -> f64 {
 fn visible_rotation(shape: &Shape, a: &Pose, b: &Pose) -> f64 {
     match shape {
         Shape::Sphere { .. } => 0.0,
-        Shape::Cylinder { .. } => {
+        Shape::Cylinder { .. } | Shape::Capsule { .. } => {
             let za = a.rotation * Vector3::z();
             let zb = b.rotation * Vector3::z();
             za.dot(&zb).clamp(-1.0, 1.0).acos()
