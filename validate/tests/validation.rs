@@ -98,9 +98,13 @@ fn a_via_point_nobody_needs_is_flagged_and_nothing_else() {
     }
 }
 
+/// On the study tasks. In `bottles` a line into the first placement is not harmless: carried
+/// straight down onto the mat, the bottle's bottom drags over the shelf before it arrives (a
+/// contact the line's compliant-insertion allowance lets through), and the drag, 13 cm below
+/// the grasp, turns it in the hand in about one trial in twelve.
 #[test]
 fn a_line_nobody_asked_for_is_flagged_and_nothing_else() {
-    for name in builtin::names() {
+    for name in builtin::study_names() {
         let task = builtin::task(name).unwrap().unwrap();
         let mut spec = task.truth.clone().unwrap();
         assert_eq!(spec.keyframes[1].constraint, Constraint::None, "{name}");
