@@ -21,6 +21,7 @@ struct Compared {
     scenes: usize,
     budget_ms: u64,
     seed: u64,
+    speed_scale: f64,
     interrupted: bool,
     rows: Vec<Row>,
 }
@@ -57,6 +58,7 @@ pub fn run(args: CompareArgs) -> CliResult {
         scenes: args.scenes,
         budget_ms: args.budget,
         seed: args.seed,
+        speed_scale: args.trials.speed.speed_scale,
         interrupted: comparison.interrupted,
         rows: comparison.rows,
     };

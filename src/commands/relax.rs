@@ -19,6 +19,7 @@ struct Relaxed<'a> {
     spec: String,
     task: String,
     output: Option<String>,
+    speed_scale: f64,
     #[serde(flatten)]
     relaxation: &'a Relaxation,
 }
@@ -75,6 +76,7 @@ pub fn run(args: RelaxArgs) -> CliResult {
             .relaxed
             .as_ref()
             .map(|_| args.output.display().to_string()),
+        speed_scale: args.run.speed.speed_scale,
         relaxation: &relaxation,
     };
     if args.json {

@@ -34,6 +34,7 @@ const LISTED_FAILURES: usize = 10;
 struct Validated<'a> {
     /// The spec's file (`spec` holds its gated trials).
     spec_file: String,
+    speed_scale: f64,
     task: String,
     demo: Option<String>,
     report_file: Option<String>,
@@ -226,6 +227,7 @@ pub fn run(args: ValidateArgs) -> CliResult {
         .collect();
     let validated = Validated {
         spec_file: args.spec.display().to_string(),
+        speed_scale: args.trials.speed.speed_scale,
         task: task.name.clone(),
         demo: args.demo.as_ref().map(|p| p.display().to_string()),
         report_file,
