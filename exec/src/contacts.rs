@@ -18,7 +18,8 @@
 //! objects that nobody holds are physics, not verdicts.
 
 use crate::world::{Owner, SimWorld};
-use akl_planner::collision::{Allowances, Scene};
+use akl_planner::collision::Scene;
+use akl_planner::contact_rules::Allowances;
 use akl_planner::contact_rules::{self, LinkRole};
 use akl_planner::Robot;
 use akl_scene::World;

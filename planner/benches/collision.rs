@@ -6,7 +6,8 @@
 //! `intersection_test` for every shape pair, without the bounding-box and segment culling.
 //! Run with `cargo bench -p akl-planner --bench collision`.
 
-use akl_planner::collision::{Allowances, Checker, RobotCollision, Scene};
+use akl_planner::collision::{Checker, RobotCollision, Scene};
+use akl_planner::contact_rules::Allowances;
 use akl_planner::{parry_convert, Robot};
 use akl_scene::builtin;
 use akl_tsr::Pose;

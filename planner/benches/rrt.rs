@@ -15,7 +15,8 @@
 //! report the mean over a set; the medians are printed before them.
 //! Run with `cargo bench -p akl-planner --bench rrt`.
 
-use akl_planner::collision::{Allowances, Checker, RobotCollision, Scene};
+use akl_planner::collision::{Checker, RobotCollision, Scene};
+use akl_planner::contact_rules::Allowances;
 use akl_planner::rrt::{rrt_connect, RrtOptions, RrtResult};
 use akl_planner::space::{distance, Space};
 use akl_planner::{plan_task, PlanOptions, Robot};

@@ -16,24 +16,18 @@
 //! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
 //! joints beyond j move the point.
 
-use crate::contact_rules::{self, LinkRole};
+use crate::contact_rules::{self, Allowances, LinkRole};
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::hand::HandModel;
 use crate::parry_convert;
-use crate::robot::Robot;
+use crate::robot::{Robot, MAX_BODIES, MAX_LINKS};
 use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
 use std::collections::VecDeque;
 use std::fmt;
-
-/// Most links a robot may have (link poses live on the stack during a check).
-pub const MAX_LINKS: usize = 32;
-
-/// Most collision elements a robot may have (they are placed on the stack during a check).
-pub const MAX_BODIES: usize = 40;
 
 /// What parry's single-precision distances are trusted to (metres): clearances it reports
 /// are reduced by this much before they are relied on.
@@ -178,30 +172,6 @@ impl fmt::Display for Hit {
             Hit::HeldRobot(h, l) => write!(f, "held {h} with {l}"),
             Hit::Limits => f.write_str("joint limits"),
         }
-    }
-}
-
-/// Contacts allowed during part of a plan (see the module documentation of `task`).
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct Allowances {
-    /// World objects the hand links may touch (the object being grasped or just released).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub hand_may_touch: Vec<String>,
-    /// World objects the held object may touch (the support it leaves or is placed on).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub held_may_touch: Vec<String>,
-    /// Fixtures the held object may brush against lightly while it is inserted into them
-    /// (judged by the simulation only: the planner keeps its clearance from them).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub held_may_brush: Vec<String>,
-}
-
-impl Allowances {
-    /// Whether nothing is allowed.
-    pub fn is_empty(&self) -> bool {
-        self.hand_may_touch.is_empty()
-            && self.held_may_touch.is_empty()
-            && self.held_may_brush.is_empty()
     }
 }
 

@@ -19,8 +19,31 @@
 //!   simulation tolerates a light contact only (its limits are the execution's);
 //! - nothing else may touch anything.
 
-use crate::collision::Allowances;
 use akl_tsr::WORLD_FRAME;
+
+/// Contacts allowed during part of a plan (see the module documentation of `task`).
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Allowances {
+    /// World objects the hand links may touch (the object being grasped or just released).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hand_may_touch: Vec<String>,
+    /// World objects the held object may touch (the support it leaves or is placed on).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_may_touch: Vec<String>,
+    /// Fixtures the held object may brush against lightly while it is inserted into them
+    /// (judged by the simulation only: the planner keeps its clearance from them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_may_brush: Vec<String>,
+}
+
+impl Allowances {
+    /// Whether nothing is allowed.
+    pub fn is_empty(&self) -> bool {
+        self.hand_may_touch.is_empty()
+            && self.held_may_touch.is_empty()
+            && self.held_may_brush.is_empty()
+    }
+}
 
 /// How far (metres) the held object may press into a support it may touch: half a millimetre,
 /// the single-precision noise of resting contact; a placement deeper than that presses the

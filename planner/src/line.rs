@@ -177,7 +177,8 @@ pub fn interpolate_turning(a: &Pose, b: &Pose, s: f64, turn_by: f64) -> Option<P
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::{Allowances, Checker, RobotCollision, Scene};
+    use crate::collision::{Checker, RobotCollision, Scene};
+    use crate::contact_rules::Allowances;
     use crate::Robot;
     use akl_scene::builtin;
     use akl_tsr::nalgebra::UnitQuaternion;

@@ -1,7 +1,7 @@
 //! The result of planning a spec: one timed joint trajectory made of segments, with the
 //! gripper events at the keyframes. Serializable to JSON (`akl plan -o plan.json`).
 
-use crate::collision::Allowances;
+use crate::contact_rules::Allowances;
 use crate::timing::Timing;
 use akl_tsr::pose::serde_pose;
 use akl_tsr::Pose;

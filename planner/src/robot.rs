@@ -1,7 +1,6 @@
 //! A robot: its URDF model (urdf-rs + k), compiled kinematics, limits, gripper, collision
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
-use crate::collision::{MAX_BODIES, MAX_LINKS};
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::error::{IkError, RobotError};
 use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
@@ -9,6 +8,12 @@ use crate::ik::{DlsIk, IkSolver, PandaIk};
 use crate::urdf_load;
 use akl_tsr::Pose;
 use std::path::Path;
+
+/// Most links a robot may have (link poses live on the stack during a check).
+pub const MAX_LINKS: usize = 32;
+
+/// Most collision elements a robot may have (they are placed on the stack during a check).
+pub const MAX_BODIES: usize = 40;
 
 /// The Panda's `robot.toml`, embedded so the binary works from any directory.
 pub const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");

@@ -229,7 +229,8 @@ pub fn rrt_connect<R: Rng + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::{Allowances, Checker, Margins, RobotCollision, Scene};
+    use crate::collision::{Checker, Margins, RobotCollision, Scene};
+    use crate::contact_rules::Allowances;
     use crate::shortcut::shortcut;
     use crate::Robot;
     use akl_scene::{builtin, Object, Shape};

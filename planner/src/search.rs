@@ -13,7 +13,7 @@
 //! too was measured slower on inspection (median wide / truth 1.000 instead of 0.988).
 //!
 //! Candidates are whole specs, not windows of keyframes: one costs a few milliseconds per
-//! keyframe (see [`MS_PER_KEYFRAME`]), so a budget of a few hundred milliseconds buys tens of
+//! keyframe (see [`crate::options::MS_PER_KEYFRAME`]), so a budget of a few hundred milliseconds buys tens of
 //! whole-spec evaluations, and the cost it minimizes is the one the robot pays.
 //!
 //! Verification plans differently: with `GoalStrategy::Sampled` every candidate draws its goals
@@ -24,54 +24,12 @@
 
 use crate::error::PlanError;
 use crate::goal::GoalStrategy;
+use crate::options::PlanOptions;
 use crate::plan::Plan;
 use crate::robot::Robot;
-use crate::task::{plan_candidate, PlanOptions};
+use crate::task::plan_candidate;
 use akl_scene::World;
 use akl_tsr::TaskSpec;
-
-/// Milliseconds one candidate takes per keyframe on the reference machine (BENCHMARKS.md,
-/// "Planning budget"): the calibration that turns `--budget MS` into a candidate count.
-///
-/// Measured by `cargo bench -p akl-planner --bench budget`: the planning time of 21-candidate
-/// searches on the three ground truths divided by candidates and keyframes gave 2.25 ms
-/// (pick_place), 1.93 ms (inspection) and 7.15 ms (assembly, whose pipe grasp plans a line
-/// ahead for every goal it accepts); their mean is 3.8 ms. A second run (14 candidates) gave
-/// 1.4, 1.9 and 5.3 ms; with 3.8 ms a 200 ms budget then took 107, 154 and 286 ms.
-pub const MS_PER_KEYFRAME: f64 = 3.8;
-
-/// How many whole-spec candidates [`plan_best`] plans.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PlanBudget {
-    /// Candidates planned (at least one).
-    pub candidates: usize,
-}
-
-impl PlanBudget {
-    /// One candidate: the nominal-first plan.
-    pub const SINGLE: PlanBudget = PlanBudget { candidates: 1 };
-
-    /// A budget of `candidates` candidates (at least one).
-    pub fn candidates(candidates: usize) -> PlanBudget {
-        PlanBudget {
-            candidates: candidates.max(1),
-        }
-    }
-
-    /// The candidates `ms` milliseconds of planning buy for a spec of `keyframes` keyframes on
-    /// the reference machine: one, plus one per [`MS_PER_KEYFRAME`] × `keyframes` ms. A fixed
-    /// conversion, so the plan never depends on how fast this machine happens to be.
-    pub fn from_millis(ms: u64, keyframes: usize) -> PlanBudget {
-        let per_candidate = MS_PER_KEYFRAME * keyframes.max(1) as f64;
-        PlanBudget::candidates(1 + (ms as f64 / per_candidate).floor() as usize)
-    }
-}
-
-impl Default for PlanBudget {
-    fn default() -> Self {
-        PlanBudget::SINGLE
-    }
-}
 
 /// What one candidate gave.
 #[derive(Debug, Clone, PartialEq)]
@@ -114,6 +72,18 @@ fn candidate_seed(seed: u64, k: usize) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// Plans `spec` for `robot` in `world`: one timed joint trajectory with gripper events, the
+/// quickest of the candidates `options.budget` allows (see [`plan_best`]).
+/// Errors name the keyframe or segment and the reason.
+pub fn plan_task(
+    robot: &Robot,
+    spec: &TaskSpec,
+    world: &World,
+    options: &PlanOptions,
+) -> Result<Plan, PlanError> {
+    plan_best(robot, spec, world, options).map(|best| best.plan)
 }
 
 /// Plans `options.budget.candidates` whole-spec candidates and keeps the quickest. Fails only
@@ -182,6 +152,7 @@ fn first_error(candidates: Vec<CandidateOutcome>) -> PlanError {
 mod tests {
     use super::*;
     use crate::check::{recheck, RecheckOptions};
+    use crate::options::PlanBudget;
     use akl_scene::builtin;
     use akl_tsr::Bounds;
 

@@ -1,7 +1,8 @@
 //! The joint space a segment is planned in: limits, the collision context (gripper opening,
 //! held object, allowed contacts) and edge validity (all along the edge, see `collision`).
 
-use crate::collision::{Allowances, Checker, Held, Hit};
+use crate::collision::{Checker, Held, Hit};
+use crate::contact_rules::Allowances;
 use rand::Rng;
 
 /// Configurations and straight joint-space edges of one planning context.

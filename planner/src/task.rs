@@ -1,4 +1,4 @@
-//! Planning a whole task spec: [`plan_task`].
+//! Planning one candidate of a whole task spec (`plan_candidate`; [`crate::search::plan_task`] keeps the best of several).
 //!
 //! The arm starts at the robot's ready configuration with the gripper open. Keyframes are
 //! handled in order, each grounded on the objects' current poses (objects move when they
@@ -32,18 +32,18 @@
 //! gripper takes its travel time plus a settling pause at each event, the arm standing still.
 //! Everything is deterministic for a given seed.
 
-use crate::collision::{Allowances, Checker, Held, RobotCollision, Scene};
-use crate::contact_rules::{Step, ENTRY_CLEARANCE};
+use crate::collision::{Checker, Held, RobotCollision, Scene};
+use crate::contact_rules::{Allowances, Step, ENTRY_CLEARANCE};
 use crate::error::PlanError;
-use crate::goal::{find_goals, GoalFailure, GoalOptions, GoalStrategy};
+use crate::goal::{find_goals, GoalFailure, GoalStrategy};
 use crate::line::{distance_to_segment, plan_line, LineFailure, LineOptions};
+use crate::options::PlanOptions;
 use crate::parry_convert;
 use crate::plan::{
     GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind, PLAN_VERSION,
 };
 use crate::robot::Robot;
-use crate::rrt::{rrt_connect, RrtOptions, RrtResult};
-use crate::search::{plan_best, PlanBudget};
+use crate::rrt::{rrt_connect, RrtResult};
 use crate::shortcut::shortcut;
 use crate::space::Space;
 use crate::squeeze::squared_in_hand;
@@ -54,80 +54,6 @@ use akl_tsr::{Constraint, Gripper, Keyframe, Pose, TaskSpec, WORLD_FRAME};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
-
-/// Settings of [`plan_task`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlanOptions {
-    /// Seed of every random choice.
-    pub seed: u64,
-    /// How far back along the tool axis grasps and releases are approached from (metres).
-    pub approach_distance: f64,
-    /// RRT-Connect settings.
-    pub rrt: RrtOptions,
-    /// Random shortcut attempts per free path.
-    pub shortcut_attempts: usize,
-    /// Goal sampling settings.
-    pub goals: GoalOptions,
-    /// Straight-line settings.
-    pub line: LineOptions,
-    /// Pause after the gripper has moved, before the arm moves on (seconds).
-    pub gripper_settle: f64,
-    /// How many whole-spec candidates to plan, keeping the quickest (see `search`). The
-    /// default, one candidate, is the nominal-first plan; `PlanBudget::from_millis` turns a
-    /// planning time into a candidate count.
-    pub budget: PlanBudget,
-    /// How fast the arm may move, in (0, 1]: the joint velocity limits are multiplied by it and
-    /// the acceleration limits by its square, so every motion is the one planned at full speed
-    /// played 1/S times as long (MoveIt's velocity scaling factor S with its acceleration
-    /// scaling factor S²; with S for both, as MoveIt users often set them, a short move limited
-    /// by acceleration would only take 1/√S as long, and "half speed" would not halve the
-    /// speed). The fingers, joints too, move at S times their speed, and the pause after each
-    /// gripper motion, which lets a closing that pushed the object first finish, is 1/S times
-    /// as long. The paths are the same; only their timing changes: the whole plan is played
-    /// 1/S times as long.
-    pub speed_scale: f64,
-}
-
-impl PlanOptions {
-    /// The joint velocity and acceleration limits the plan is timed with: the robot's,
-    /// scaled by [`PlanOptions::speed_scale`] and its square.
-    pub fn limits(&self, robot: &Robot) -> (Vec<f64>, Vec<f64>) {
-        let scale = |v: &[f64], by: f64| v.iter().map(|x| x * by).collect();
-        let s = self.speed_scale;
-        (
-            scale(robot.velocity_limits(), s),
-            scale(robot.acceleration_limits(), s * s),
-        )
-    }
-
-    /// Checks [`PlanOptions::speed_scale`].
-    pub fn check(&self) -> Result<(), PlanError> {
-        if self.speed_scale > 0.0 && self.speed_scale <= 1.0 {
-            Ok(())
-        } else {
-            Err(PlanError::Options(format!(
-                "the speed scale must be in (0, 1], not {}",
-                self.speed_scale
-            )))
-        }
-    }
-}
-
-impl Default for PlanOptions {
-    fn default() -> Self {
-        PlanOptions {
-            seed: 0,
-            approach_distance: 0.06,
-            rrt: RrtOptions::default(),
-            shortcut_attempts: 100,
-            goals: GoalOptions::default(),
-            line: LineOptions::default(),
-            gripper_settle: 0.2,
-            budget: PlanBudget::SINGLE,
-            speed_scale: 1.0,
-        }
-    }
-}
 
 /// The object in the hand.
 #[derive(Debug, Clone)]
@@ -186,18 +112,6 @@ struct Planner<'a> {
     pending_line: Option<PlannedLine>,
     /// An object released with no retreat (a line follows): the hand may touch it on that line.
     just_released: Option<String>,
-}
-
-/// Plans `spec` for `robot` in `world`: one timed joint trajectory with gripper events, the
-/// quickest of the candidates `options.budget` allows (see [`plan_best`]).
-/// Errors name the keyframe or segment and the reason.
-pub fn plan_task(
-    robot: &Robot,
-    spec: &TaskSpec,
-    world: &World,
-    options: &PlanOptions,
-) -> Result<Plan, PlanError> {
-    plan_best(robot, spec, world, options).map(|best| best.plan)
 }
 
 /// Plans one candidate: every keyframe in turn, its goals chosen by
@@ -1171,6 +1085,8 @@ mod tests {
     use super::*;
     use crate::check::{recheck, RecheckOptions};
     use crate::robot::{PANDA_TOML, PANDA_URDF};
+    use crate::rrt::RrtOptions;
+    use crate::search::plan_task;
     use akl_scene::{builtin, randomize, Object};
     use proptest::prelude::*;
     use std::path::Path;

@@ -12,7 +12,7 @@ use crate::contacts::{ContactLog, ContactPoint, ContactRoles, StepContext};
 use crate::grasp::{read_pads, PadReading};
 use crate::trial::{ExecOptions, Frame, Setup, Timeline};
 use crate::world::SimWorld;
-use akl_planner::collision::Allowances;
+use akl_planner::contact_rules::Allowances;
 use akl_planner::{Plan, SegmentKind};
 use akl_scene::World;
 use akl_tsr::pose::position_distance;

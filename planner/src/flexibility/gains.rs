@@ -4,9 +4,9 @@
 //! freedom would give).
 
 use super::FlexibilityError;
+use crate::options::PlanOptions;
 use crate::robot::Robot;
 use crate::search::plan_best;
-use crate::task::PlanOptions;
 use akl_scene::{randomize, Task};
 use akl_tsr::TaskSpec;
 use serde::Serialize;
