@@ -1,0 +1,418 @@
+//! The checker: one configuration, or a joint-space edge, against the world and the arm
+//! itself.
+
+use super::cull::bounding_box;
+use super::cull::box_gap_sq;
+use super::cull::placed;
+use super::cull::segment_distance_sq;
+use super::cull::Placed;
+use super::held::Held;
+use super::hit::Hit;
+use super::model::Group;
+use super::model::RobotCollision;
+use super::scene::Obstacle;
+use super::scene::Scene;
+use super::sweep::Proof;
+use super::sweep::Sweep;
+use crate::contact_rules;
+use crate::contact_rules::Allowances;
+use crate::contact_rules::LinkRole;
+use crate::parry_convert;
+use crate::robot::Robot;
+use crate::robot::MAX_BODIES;
+use crate::robot::MAX_LINKS;
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
+use parry3d::shape::SharedShape;
+use std::collections::VecDeque;
+
+/// What parry's single-precision distances are trusted to (metres): clearances it reports
+/// are reduced by this much before they are relied on.
+const DISTANCE_TOLERANCE: f64 = 1e-5;
+
+/// Checks configurations of one robot in one scene.
+#[derive(Debug, Clone)]
+pub struct Checker<'a> {
+    pub(super) robot: &'a Robot,
+    pub(super) model: &'a RobotCollision,
+    pub(super) scene: &'a Scene,
+}
+
+impl<'a> Checker<'a> {
+    /// A checker for `robot` (with its prepared `model`) in `scene`.
+    pub fn new(robot: &'a Robot, model: &'a RobotCollision, scene: &'a Scene) -> Self {
+        Checker {
+            robot,
+            model,
+            scene,
+        }
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> &'a Robot {
+        self.robot
+    }
+
+    /// The robot's collision model.
+    pub fn model(&self) -> &'a RobotCollision {
+        self.model
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &'a Scene {
+        self.scene
+    }
+
+    /// The first collision of configuration `q` with gripper opening `width`, holding `held`
+    /// (if any), under `allow`; `None` if it is collision-free and within the joint limits.
+    pub fn check(
+        &self,
+        q: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+    ) -> Option<Hit> {
+        if !self.within_limits(q) {
+            return Some(Hit::Limits);
+        }
+        self.probe::<false>(q, width, held, allow, None).err()
+    }
+
+    pub(super) fn within_limits(&self, q: &[f64]) -> bool {
+        q.iter()
+            .zip(self.robot.joint_limits())
+            .all(|(v, [lo, hi])| *v >= *lo && *v <= *hi)
+    }
+
+    /// Whether `q` is collision-free (see [`Checker::check`]).
+    pub fn is_free(&self, q: &[f64], width: f64, held: Option<&Held>, allow: &Allowances) -> bool {
+        self.check(q, width, held, allow).is_none()
+    }
+
+    /// Writes into `sweep.bounds` the motion bounds of every chain for the joint motion
+    /// `sweep.half` about the configuration whose link poses are `poses`.
+    ///
+    /// Going from the last joint of a chain to the first, with D the bound through the joints
+    /// beyond joint j: the point stays within r + D of joint j's axis, r being its distance
+    /// at the configuration (the element's centre's distance plus the element's extent), so
+    /// turning joint j by Δ adds (r + D)·|Δ|; sliding it adds |Δ|.
+    pub(super) fn sweep_bounds(
+        &self,
+        poses: &[Pose],
+        placed_bodies: &[Placed],
+        held: Option<&Held>,
+        sweep: &mut Sweep,
+    ) {
+        let model = self.model;
+        let tcp = poses[model.tcp];
+        let mut axes = [Vector3::zeros(); MAX_LINKS];
+        for &(link, axis) in &model.turned {
+            axes[link] = poses[link].rotation * axis;
+        }
+        for (k, chain) in model.chains.iter().enumerate() {
+            let (centre, extent) = match (placed_bodies.get(k), model.bodies.get(k)) {
+                (Some(p), Some(b)) => (p.pose.translation.vector, b.half_segment + b.core_radius),
+                _ => match held {
+                    Some(h) => ((tcp * h.in_tcp).translation.vector, h.core),
+                    None => (tcp.translation.vector, 0.0),
+                },
+            };
+            let slots = &mut sweep.bounds[model.offsets[k]..model.offsets[k + 1]];
+            let mut d = 0.0;
+            slots[chain.len()] = d;
+            for (m, mover) in chain.iter().enumerate().rev() {
+                let turn = mover.scale.abs() * sweep.half[mover.index];
+                d += if mover.axis.is_some() {
+                    let origin = poses[mover.link].translation.vector;
+                    let r = (centre - origin).cross(&axes[mover.link]).norm() + extent;
+                    (r + d) * turn
+                } else {
+                    turn
+                };
+                slots[m] = d;
+            }
+        }
+    }
+
+    /// Upper bound on how far any point of the robot's collision elements, or of `held`,
+    /// moves when the arm goes in a straight joint-space line from `a` to `b` with gripper
+    /// opening `width` (the bound of [`Checker::edge`], taken about the edge's midpoint).
+    pub fn sweep_bound(&self, a: &[f64], b: &[f64], width: f64, held: Option<&Held>) -> f64 {
+        let mid: Vec<f64> = a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
+        let n = self.robot.links().len().min(MAX_LINKS);
+        let mut poses = [Pose::identity(); MAX_LINKS];
+        self.robot
+            .kinematics()
+            .link_poses_into(&mid, width, &mut poses[..n]);
+        let mut placed_bodies = [Placed::default(); MAX_BODIES];
+        for (slot, body) in placed_bodies.iter_mut().zip(&self.model.bodies) {
+            *slot = placed(body, &poses[body.link]);
+        }
+        let nb = self.model.bodies.len().min(MAX_BODIES);
+        let mut sweep = Sweep::new(self.model, a.len());
+        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
+            *h = 0.5 * (y - x).abs();
+        }
+        self.sweep_bounds(&poses[..n], &placed_bodies[..nb], held, &mut sweep);
+        let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
+        (0..last)
+            .map(|k| sweep.bounds[self.model.offsets[k]])
+            .fold(0.0, f64::max)
+            * 2.0
+    }
+
+    /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
+    /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
+    /// proved free (see the module documentation). Plain checks are compiled without the
+    /// proof's work.
+    pub(super) fn probe<const PROVE: bool>(
+        &self,
+        q: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+        sweep: Option<&mut Sweep>,
+    ) -> Result<f64, Hit> {
+        let links = self.robot.links();
+        let n = links.len().min(MAX_LINKS);
+        let mut poses = [Pose::identity(); MAX_LINKS];
+        self.robot
+            .kinematics()
+            .link_poses_into(q, width, &mut poses[..n]);
+        for p in &mut poses[..n] {
+            *p = self.scene.base * *p;
+        }
+        let model = self.model;
+        let bodies = &model.bodies;
+        let nb = bodies.len().min(MAX_BODIES);
+        let mut placed_bodies = [Placed::default(); MAX_BODIES];
+        for (slot, b) in placed_bodies.iter_mut().zip(bodies) {
+            *slot = placed(b, &poses[b.link]);
+        }
+        let placed_bodies = &placed_bodies[..nb];
+        let mut proof = sweep.filter(|_| PROVE).map(|s| {
+            self.sweep_bounds(&poses[..n], placed_bodies, held, s);
+            Proof {
+                sweep: s,
+                offsets: &model.offsets,
+                fraction: 1.0,
+            }
+        });
+        let m = model.margins;
+        // Self collision: bounding balls, then segment distance, then parry.
+        let self_slack = 0.5 * m.self_;
+        for (p, &(i, j)) in model.self_pairs.iter().enumerate() {
+            let (Some(pa), Some(pb)) = (placed_bodies.get(i), placed_bodies.get(j)) else {
+                continue;
+            };
+            let (ba, bb) = (&bodies[i], &bodies[j]);
+            let reach = ba.self_radius + bb.self_radius;
+            let balls = reach + ba.half_segment + bb.half_segment;
+            let centres = 0.5 * ((pa.a + pa.b) - (pb.a + pb.b));
+            let moved = proof.as_ref().map_or(0.0, |pr| {
+                let s = model.self_shared[p];
+                pr.moved(i, s) + pr.moved(j, s)
+            });
+            let centres_sq = centres.norm_squared();
+            if let Some(pr) = proof.as_mut() {
+                // The distance of the bounding balls first, the segments' only if it matters.
+                let balls_gap = centres_sq.sqrt() - balls;
+                if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
+                    continue;
+                }
+                let gap = segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b).sqrt() - reach;
+                if gap > 0.0 {
+                    pr.limit(moved, self_slack + gap);
+                    continue;
+                }
+            } else if centres_sq > balls * balls
+                || segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b) > reach * reach
+            {
+                continue;
+            }
+            if parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose) {
+                return Err(Hit::SelfCollision(
+                    links[ba.link].name.clone(),
+                    links[bb.link].name.clone(),
+                ));
+            }
+            if let Some(pr) = proof.as_mut() {
+                pr.limit(moved, self_slack);
+            }
+        }
+        // Robot against the world.
+        for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
+            let slack = 0.5
+                * match b.group {
+                    Group::Arm => m.arm,
+                    Group::Hand => m.hand,
+                };
+            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
+            let bounds = bounding_box(p, b.world_radius);
+            let role = LinkRole {
+                hand: b.group == Group::Hand,
+                mount: model.mount_links.contains(&b.link),
+            };
+            for o in &self.scene.obstacles {
+                if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
+                    continue;
+                }
+                if !clear_of(&b.world_shape, p, &bounds, o, proof.as_mut(), moved, slack) {
+                    return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                }
+            }
+        }
+        // The held object against the world and the arm.
+        if let Some(h) = held {
+            let pose = poses[model.tcp] * h.in_tcp * h.local;
+            let centre = (poses[model.tcp] * h.in_tcp).translation.vector;
+            let ball = Placed {
+                pose,
+                a: centre,
+                b: centre,
+            };
+            let extent = h.radius - h.in_tcp.translation.vector.norm();
+            let held_chain = bodies.len();
+            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(held_chain, 0));
+            let bounds = bounding_box(&ball, extent);
+            for o in &self.scene.obstacles {
+                if contact_rules::held_may_touch(&o.name, allow) {
+                    // It may rest on it, not press into it (checked where tested, not proved
+                    // over edges: pressing in is deepest where a placement ends).
+                    let exact = poses[model.tcp] * h.in_tcp * h.local;
+                    let depth = parry_convert::penetration(&h.exact, &exact, &o.shape, &o.pose);
+                    if depth.is_some_and(|d| d > contact_rules::PRESS_DEPTH) {
+                        return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
+                    }
+                    continue;
+                }
+                let slack = 0.5 * h.margin;
+                if !clear_of(&h.grown, &ball, &bounds, o, proof.as_mut(), moved, slack) {
+                    return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
+                }
+            }
+            let slack = 0.5 * (h.margin + 0.5 * m.self_);
+            for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
+                if b.group == Group::Hand {
+                    continue;
+                }
+                let reach = extent + b.self_radius;
+                let moved = proof.as_ref().map_or(0.0, |pr| {
+                    let s = model.tcp_shared[k];
+                    pr.moved(held_chain, s) + pr.moved(k, s)
+                });
+                let d_sq = segment_distance_sq(&p.a, &p.b, &centre, &centre);
+                if d_sq > reach * reach {
+                    if let Some(pr) = proof.as_mut() {
+                        pr.limit(moved, slack + d_sq.sqrt() - reach);
+                    }
+                    continue;
+                }
+                if parry_convert::intersects(&b.self_shape, &p.pose, &h.grown, &pose) {
+                    return Err(Hit::HeldRobot(h.name.clone(), links[b.link].name.clone()));
+                }
+                if let Some(pr) = proof.as_mut() {
+                    pr.limit(moved, slack);
+                }
+            }
+        }
+        Ok(proof.map_or(1.0, |pr| pr.fraction))
+    }
+
+    /// The first collision on the straight joint-space edge from `a` to `b` (endpoints
+    /// included), or `None` if every clearance keeps at least half its margin all along it.
+    ///
+    /// Each check on the edge proves a stretch about it free: no point moves further than the
+    /// clearance found there plus half its margin, by the bound of [`Checker::sweep_bound`]
+    /// taken at the check for the stretch (see the module documentation). Both ends are
+    /// checked first, each proving a stretch into the edge; then the midpoint of what is left,
+    /// and so on breadth first on either side of what each check proved, so that checks
+    /// spread over the edge in bisection order and collisions are found early. Each check
+    /// proves at least half the smallest margin of motion, so the number of checks is at most
+    /// about the bound on how far points move divided by that.
+    pub fn edge(
+        &self,
+        a: &[f64],
+        b: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+    ) -> Option<Hit> {
+        if !self.within_limits(a) || !self.within_limits(b) {
+            return Some(Hit::Limits);
+        }
+        let mut sweep = Sweep::new(self.model, a.len());
+        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
+            *h = (y - x).abs();
+        }
+        // Each end proves a stretch into the edge (the bound covers the whole edge about it).
+        let mut ends = [0.0; 2];
+        for (end, q) in ends.iter_mut().zip([b, a]) {
+            match self.probe::<true>(q, width, held, allow, Some(&mut sweep)) {
+                Ok(fraction) => *end = fraction,
+                Err(hit) => return Some(hit),
+            }
+        }
+        let mut open = VecDeque::new();
+        if ends[0] + ends[1] < 1.0 {
+            open.push_back((ends[1], 1.0 - ends[0]));
+        }
+        let mut q = vec![0.0; a.len()];
+        while let Some((lo, hi)) = open.pop_front() {
+            let mid = 0.5 * (lo + hi);
+            let half = 0.5 * (hi - lo);
+            for i in 0..a.len() {
+                q[i] = a[i] + mid * (b[i] - a[i]);
+                sweep.half[i] = half * (b[i] - a[i]).abs();
+            }
+            // Within the joint limits: the ends are, and the limits are a box.
+            let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
+                Ok(fraction) => half * fraction,
+                Err(hit) => return Some(hit),
+            };
+            if proved < half {
+                open.push_back((lo, mid - proved));
+                open.push_back((mid + proved, hi));
+            }
+        }
+        None
+    }
+}
+
+/// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
+/// clear of `o`; with a proof, for an element moving up to `moved` with `slack` to spare,
+/// the clearance found also limits the fraction proved free.
+#[inline(always)]
+pub(super) fn clear_of(
+    shape: &SharedShape,
+    placed: &Placed,
+    bounds: &[Vector3<f64>; 2],
+    o: &Obstacle,
+    proof: Option<&mut Proof>,
+    moved: f64,
+    slack: f64,
+) -> bool {
+    let Some(pr) = proof else {
+        let overlap = (0..3).all(|i| bounds[0][i] <= o.max[i] && bounds[1][i] >= o.min[i]);
+        return !overlap || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    };
+    let gap_sq = box_gap_sq(bounds, &o.min, &o.max);
+    if gap_sq > 0.0 {
+        pr.limit(moved, slack + gap_sq.sqrt());
+        return true;
+    }
+    if pr.settled(moved, slack) {
+        return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
+    }
+    match parry_convert::distance(shape, &placed.pose, &o.shape, &o.pose) {
+        Some(d) if d > 0.0 => {
+            pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
+            true
+        }
+        Some(_) => false,
+        None => {
+            pr.limit(moved, slack);
+            !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose)
+        }
+    }
+}

@@ -1,0 +1,89 @@
+//! Cheap geometry that culls exact tests: bodies placed as segments, their bounding boxes
+//! and the distance between segments.
+
+use super::model::Body;
+use akl_tsr::nalgebra::Point3;
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
+
+/// A capsule-like body in world coordinates: a segment and a radius.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Placed {
+    pub(super) pose: Pose,
+    pub(super) a: Vector3<f64>,
+    pub(super) b: Vector3<f64>,
+}
+
+#[inline(always)]
+pub(super) fn placed(body: &Body, link_pose: &Pose) -> Placed {
+    let pose = link_pose * body.local;
+    let a = (pose * Point3::new(0.0, 0.0, -body.half_segment)).coords;
+    let b = (pose * Point3::new(0.0, 0.0, body.half_segment)).coords;
+    Placed { pose, a, b }
+}
+
+/// The world-axis-aligned box around `p` grown by `r`: its lower and upper corners.
+pub(super) fn bounding_box(p: &Placed, r: f64) -> [Vector3<f64>; 2] {
+    let grow = Vector3::repeat(r);
+    [p.a.inf(&p.b) - grow, p.a.sup(&p.b) + grow]
+}
+
+/// Squared distance between two world-axis-aligned boxes (0 when they overlap).
+pub(super) fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
+    (a[0] - max)
+        .sup(&(min - a[1]))
+        .sup(&Vector3::zeros())
+        .norm_squared()
+}
+
+/// Squared distance between segments [p1, q1] and [p2, q2] (Ericson, Real-Time Collision
+/// Detection, §5.1.9), for the cheap rejection of far link pairs.
+pub(super) fn segment_distance_sq(
+    p1: &Vector3<f64>,
+    q1: &Vector3<f64>,
+    p2: &Vector3<f64>,
+    q2: &Vector3<f64>,
+) -> f64 {
+    let d1 = q1 - p1;
+    let d2 = q2 - p2;
+    let r = p1 - p2;
+    let a = d1.dot(&d1);
+    let e = d2.dot(&d2);
+    let f = d2.dot(&r);
+    let (s, t);
+    if a <= 1e-12 && e <= 1e-12 {
+        return r.dot(&r);
+    }
+    if a <= 1e-12 {
+        s = 0.0;
+        t = (f / e).clamp(0.0, 1.0);
+    } else {
+        let c = d1.dot(&r);
+        if e <= 1e-12 {
+            t = 0.0;
+            s = (-c / a).clamp(0.0, 1.0);
+        } else {
+            let b = d1.dot(&d2);
+            let denom = a * e - b * b;
+            let s0 = if denom > 1e-12 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t0 = (b * s0 + f) / e;
+            if t0 < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t0 > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            } else {
+                t = t0;
+                s = s0;
+            }
+        }
+    }
+    let c1 = p1 + d1 * s;
+    let c2 = p2 + d2 * t;
+    (c1 - c2).norm_squared()
+}

@@ -1,0 +1,33 @@
+//! Collision checking of the arm, the hand and a held object against the world and the arm
+//! itself, with parry3d shapes and cheap bounding-box culling before each exact test.
+//!
+//! Margins (from `robot.toml`): arm links are grown by `arm_margin`, hand links by
+//! `hand_margin` and a held object by `held_margin` before being tested against the exact
+//! world objects; two links are each grown by half of `self_margin` before being tested
+//! against each other. Link pairs in `allowed_pairs` are never tested, nor `mount_links`
+//! against the object under the robot base.
+//!
+//! Edges (straight joint-space segments, [`Checker::edge`]) are checked continuously in the
+//! following sense: every clearance keeps at least half its margin everywhere along an edge
+//! reported free. Each check on the edge proves a stretch around it free, as long as the
+//! stretch is short enough that no point moves further than the clearance found at the
+//! check plus half the margin. How far points move is bounded per collision element by
+//! [`Checker::sweep_bound`]: turning joint j by Δ moves a point at distance r from its axis by
+//! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
+//! joints beyond j move the point.
+
+mod checker;
+mod cull;
+mod held;
+mod hit;
+mod model;
+mod scene;
+mod sweep;
+#[cfg(test)]
+mod tests;
+
+pub use checker::Checker;
+pub use held::Held;
+pub use hit::Hit;
+pub use model::{Group, Margins, RobotCollision};
+pub use scene::Scene;

@@ -1,0 +1,245 @@
+//! The robot's collision model: its bodies (collision elements grown by their margins),
+//! the joints that move each, and which pairs are checked against each other.
+
+use crate::fk::Drive;
+use crate::fk::Kinematics;
+use crate::fk::Motion;
+use crate::geometry::Geometry;
+use crate::hand::HandModel;
+use crate::parry_convert;
+use crate::robot::Robot;
+use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
+use parry3d::shape::SharedShape;
+
+/// Which margin a link's shapes get.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Group {
+    /// Arm links (`arm_margin`).
+    Arm,
+    /// Hand and finger links (`hand_margin`).
+    Hand,
+}
+
+/// One collision element of the robot, prepared for checking.
+#[derive(Debug, Clone)]
+pub(super) struct Body {
+    pub(super) link: usize,
+    pub(super) group: Group,
+    /// Pose of the parry shape in the link frame.
+    pub(super) local: Pose,
+    /// Grown by the group's margin, for tests against the world and a held object.
+    pub(super) world_shape: SharedShape,
+    /// Grown by half the self margin, for tests between links.
+    pub(super) self_shape: SharedShape,
+    /// Half the capsule's segment (0 for other shapes), and the radii of balls around the
+    /// segment that hold the shape itself, the shape grown by the group's margin and the
+    /// shape grown by half the self margin.
+    pub(super) half_segment: f64,
+    pub(super) core_radius: f64,
+    pub(super) world_radius: f64,
+    pub(super) self_radius: f64,
+}
+
+/// A joint that moves a collision element when the arm moves: the link it turns or slides,
+/// the arm joint that drives it and by how much, and its axis in the link frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Mover {
+    pub(super) link: usize,
+    pub(super) index: usize,
+    pub(super) scale: f64,
+    /// `None` for a prismatic joint.
+    pub(super) axis: Option<Vector3<f64>>,
+}
+
+/// The robot's collision model: its shapes, the link pairs to test and the joint chains used
+/// to bound how far they move along edges.
+#[derive(Debug, Clone)]
+pub struct RobotCollision {
+    pub(super) bodies: Vec<Body>,
+    pub(super) self_pairs: Vec<(usize, usize)>,
+    pub(super) mount_links: Vec<usize>,
+    pub(super) margins: Margins,
+    pub(super) tcp: usize,
+    /// For each body, then for the TCP: the arm-driven joints from the base to its link.
+    pub(super) chains: Vec<Vec<Mover>>,
+    /// Where each chain's motion bounds start in a [`Sweep`]'s `bounds`.
+    pub(super) offsets: Vec<usize>,
+    /// For each self pair, how many leading joints of their chains the two bodies share.
+    pub(super) self_shared: Vec<usize>,
+    /// For each body, how many leading joints its chain shares with the TCP's.
+    pub(super) tcp_shared: Vec<usize>,
+    /// The links turned by arm-driven revolute joints, with their axes in the link frame.
+    pub(super) turned: Vec<(usize, Vector3<f64>)>,
+}
+
+/// Every collision element of `robot` as (link, geometry, pose in the link frame): the URDF's
+/// shapes, and the simulated hand's palm and pads ([`crate::hand`]), whose box corners reach
+/// past the URDF's capsules: the planner keeps clear whatever the simulated hand can touch.
+pub(super) fn collision_elements(robot: &Robot) -> Vec<(usize, Geometry, Pose)> {
+    let urdf = robot
+        .links()
+        .iter()
+        .enumerate()
+        .flat_map(|(i, link)| link.shapes.iter().map(move |s| (i, s.geometry, s.origin)));
+    let hand = HandModel::new(robot).map(|h| h.boxes()).unwrap_or_default();
+    urdf.chain(hand).collect()
+}
+
+/// The clearances kept (metres).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Margins {
+    /// Arm links against the world.
+    pub arm: f64,
+    /// Hand links against the world.
+    pub hand: f64,
+    /// A held object against the world and the arm.
+    pub held: f64,
+    /// Between links.
+    pub self_: f64,
+}
+
+/// The arm-driven joints between the base and `link`, base first.
+pub(super) fn chain_to(kin: &Kinematics, link: usize) -> Vec<Mover> {
+    let links = kin.links();
+    let mut chain = Vec::new();
+    let mut at = Some(link);
+    while let Some(i) = at {
+        let (axis, drive) = match links[i].motion {
+            Motion::Revolute { axis, drive } => (Some(axis.into_inner()), drive),
+            Motion::Prismatic { drive, .. } => (None, drive),
+            Motion::Fixed => (None, Drive::Constant(0.0)),
+        };
+        if let Drive::Arm { index, scale, .. } = drive {
+            chain.push(Mover {
+                link: i,
+                index,
+                scale,
+                axis,
+            });
+        }
+        at = links[i].parent;
+    }
+    chain.reverse();
+    chain
+}
+
+/// How many leading joints two chains share.
+pub(super) fn shared(a: &[Mover], b: &[Mover]) -> usize {
+    a.iter()
+        .zip(b)
+        .take_while(|(x, y)| x.link == y.link)
+        .count()
+}
+
+impl RobotCollision {
+    /// Prepares the robot's shapes, self-collision pairs and joint chains with the margins of
+    /// its `robot.toml`.
+    pub fn new(robot: &Robot) -> RobotCollision {
+        let c = &robot.config().collision;
+        let margins = Margins {
+            arm: c.arm_margin,
+            hand: c.hand_margin,
+            held: c.held_margin,
+            self_: c.self_margin,
+        };
+        Self::with_margins(robot, margins)
+    }
+
+    /// The same with other margins (e.g. to re-check a plan with the clearance it guarantees).
+    pub fn with_margins(robot: &Robot, margins: Margins) -> RobotCollision {
+        let mut bodies = Vec::new();
+        for (i, geometry, origin) in collision_elements(robot) {
+            let group = if robot.hand_links().contains(&i) {
+                Group::Hand
+            } else {
+                Group::Arm
+            };
+            let margin = match group {
+                Group::Arm => margins.arm,
+                Group::Hand => margins.hand,
+            };
+            let (world_shape, fix) = parry_convert::robot_shape(&geometry, margin);
+            let (self_shape, _) = parry_convert::robot_shape(&geometry, 0.5 * margins.self_);
+            let (half_segment, core) = match geometry {
+                Geometry::Capsule { radius, length } => (0.5 * length, radius),
+                other => (0.0, other.bounding_radius()),
+            };
+            bodies.push(Body {
+                link: i,
+                group,
+                local: origin * fix,
+                world_shape,
+                self_shape,
+                half_segment,
+                core_radius: core,
+                world_radius: core + margin,
+                self_radius: core + 0.5 * margins.self_,
+            });
+        }
+        let allowed = |a: usize, b: usize| {
+            a == b
+                || robot
+                    .allowed_pairs()
+                    .iter()
+                    .any(|&(x, y)| (x, y) == (a, b) || (y, x) == (a, b))
+        };
+        let mut self_pairs = Vec::new();
+        for i in 0..bodies.len() {
+            for j in i + 1..bodies.len() {
+                if !allowed(bodies[i].link, bodies[j].link) {
+                    self_pairs.push((i, j));
+                }
+            }
+        }
+        let kin = robot.kinematics();
+        let tcp = robot.tcp_link();
+        let mut chains: Vec<Vec<Mover>> = bodies.iter().map(|b| chain_to(kin, b.link)).collect();
+        chains.push(chain_to(kin, tcp));
+        let mut offsets = Vec::with_capacity(chains.len() + 1);
+        let mut next = 0;
+        for chain in &chains {
+            offsets.push(next);
+            next += chain.len() + 1;
+        }
+        offsets.push(next);
+        let tcp_chain = &chains[bodies.len()];
+        let self_shared = self_pairs
+            .iter()
+            .map(|&(i, j)| shared(&chains[i], &chains[j]))
+            .collect();
+        let tcp_shared = chains[..bodies.len()]
+            .iter()
+            .map(|c| shared(c, tcp_chain))
+            .collect();
+        let mut turned: Vec<(usize, Vector3<f64>)> = chains
+            .iter()
+            .flatten()
+            .filter_map(|m| m.axis.map(|axis| (m.link, axis)))
+            .collect();
+        turned.sort_by_key(|(link, _)| *link);
+        turned.dedup_by_key(|(link, _)| *link);
+        RobotCollision {
+            bodies,
+            self_pairs,
+            mount_links: robot.mount_links().to_vec(),
+            margins,
+            tcp,
+            chains,
+            offsets,
+            self_shared,
+            tcp_shared,
+            turned,
+        }
+    }
+
+    /// The margins in use.
+    pub fn margins(&self) -> Margins {
+        self.margins
+    }
+
+    /// Number of link pairs tested against each other.
+    pub fn self_pair_count(&self) -> usize {
+        self.self_pairs.len()
+    }
+}

@@ -1,0 +1,53 @@
+//! The proof that a stretch of a joint-space edge is free: how far the bodies move along it
+//! ([`Sweep`]) against the clearances found at a check ([`Proof`]).
+
+use super::model::RobotCollision;
+
+/// Work space of an edge check: the joint motion of the stretch being proved free and the
+/// motion bounds derived from it.
+pub(super) struct Sweep {
+    /// How far each arm joint turns or slides from the check to either end of the stretch.
+    pub(super) half: Vec<f64>,
+    /// For each chain k of the model, `bounds[offsets[k] + m]` bounds how far any point of
+    /// its element moves through the joints `m..` of the chain (0 past the last one).
+    pub(super) bounds: Vec<f64>,
+}
+
+impl Sweep {
+    pub(super) fn new(model: &RobotCollision, dof: usize) -> Sweep {
+        Sweep {
+            half: vec![0.0; dof],
+            bounds: vec![0.0; model.offsets.last().copied().unwrap_or(0)],
+        }
+    }
+}
+
+/// Tracks, during one check, how much of a stretch its clearances prove free: the fraction
+/// of the stretch (up to 1) over which no element moves further than its clearance plus
+/// half its margin.
+pub(super) struct Proof<'s> {
+    pub(super) sweep: &'s Sweep,
+    pub(super) offsets: &'s [usize],
+    pub(super) fraction: f64,
+}
+
+impl Proof<'_> {
+    /// Bound on how far chain `k` moves through its joints from `from` on.
+    pub(super) fn moved(&self, k: usize, from: usize) -> f64 {
+        self.sweep.bounds[self.offsets[k] + from]
+    }
+
+    /// Whether a clearance larger than 0 would shorten nothing: an element moving `moved`
+    /// with `slack` to spare is already within the current fraction.
+    pub(super) fn settled(&self, moved: f64, slack: f64) -> bool {
+        moved * self.fraction <= slack
+    }
+
+    /// Limits the fraction to what `slack` (clearance plus half the margin) allows an element
+    /// moving up to `moved` over the whole stretch.
+    pub(super) fn limit(&mut self, moved: f64, slack: f64) {
+        if moved * self.fraction > slack {
+            self.fraction = slack / moved;
+        }
+    }
+}
