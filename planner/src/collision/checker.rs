@@ -1,26 +1,15 @@
 //! The checker: one configuration, or a joint-space edge, against the world and the arm
 //! itself.
 
-use super::cull::bounding_box;
-use super::cull::box_gap_sq;
-use super::cull::placed;
-use super::cull::segment_distance_sq;
-use super::cull::Placed;
+use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed};
 use super::held::Held;
 use super::hit::Hit;
-use super::model::Group;
-use super::model::RobotCollision;
-use super::scene::Obstacle;
-use super::scene::Scene;
-use super::sweep::Proof;
-use super::sweep::Sweep;
-use crate::contact_rules;
-use crate::contact_rules::Allowances;
-use crate::contact_rules::LinkRole;
-use crate::parry_convert;
-use crate::robot::Robot;
-use crate::robot::MAX_BODIES;
-use crate::robot::MAX_LINKS;
+use super::model::{Group, RobotCollision};
+use super::scene::{Obstacle, Scene};
+use super::sweep::{Proof, Sweep};
+use crate::contact_rules::{Allowances, LinkRole};
+use crate::robot::{Robot, MAX_BODIES, MAX_LINKS};
+use crate::{contact_rules, parry_convert};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;

@@ -2,8 +2,7 @@
 //! and the distance between segments.
 
 use super::model::Body;
-use akl_tsr::nalgebra::Point3;
-use akl_tsr::nalgebra::Vector3;
+use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 
 /// A capsule-like body in world coordinates: a segment and a radius.

@@ -1,9 +1,7 @@
 //! The robot's collision model: its bodies (collision elements grown by their margins),
 //! the joints that move each, and which pairs are checked against each other.
 
-use crate::fk::Drive;
-use crate::fk::Kinematics;
-use crate::fk::Motion;
+use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::hand::HandModel;
 use crate::parry_convert;

@@ -1,31 +1,19 @@
 //! Reaching a keyframe by free motion (goals, RRT-Connect, shortcutting), lifting a held
 //! object off its support, and checking that the next step can follow an event.
 
-use super::backed_off;
-use super::centred_in_hand;
-use super::grasp_width;
-use super::line_error;
-use super::Event;
-use super::GoalPaths;
-use super::PlannedLine;
-use super::Planner;
-use crate::collision::Checker;
-use crate::collision::Held;
-use crate::collision::Scene;
-use crate::contact_rules::Allowances;
-use crate::contact_rules::Step;
+use super::{
+    backed_off, centred_in_hand, grasp_width, line_error, Event, GoalPaths, PlannedLine, Planner,
+};
+use crate::collision::{Checker, Held, Scene};
+use crate::contact_rules::{Allowances, Step};
 use crate::error::PlanError;
-use crate::goal::find_goals;
-use crate::goal::GoalFailure;
+use crate::goal::{find_goals, GoalFailure};
 use crate::line::plan_line;
-use crate::plan::LinePoses;
-use crate::plan::SegmentKind;
-use crate::rrt::rrt_connect;
-use crate::rrt::RrtResult;
+use crate::plan::{LinePoses, SegmentKind};
+use crate::rrt::{rrt_connect, RrtResult};
 use crate::shortcut::shortcut;
 use crate::space::Space;
-use akl_tsr::Keyframe;
-use akl_tsr::Pose;
+use akl_tsr::{Keyframe, Pose};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;

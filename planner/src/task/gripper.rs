@@ -1,19 +1,10 @@
 //! Grasps and releases: approaching, closing or opening, and backing off.
 
-use super::backed_off;
-use super::centred_in_hand;
-use super::grasp_width;
-use super::line_error;
-use super::Holding;
-use super::PlannedLine;
-use super::Planner;
+use super::{backed_off, centred_in_hand, grasp_width, line_error, Holding, PlannedLine, Planner};
 use crate::collision::Held;
 use crate::contact_rules::Step;
 use crate::error::PlanError;
-use crate::plan::GripperAction;
-use crate::plan::GripperEvent;
-use crate::plan::LinePoses;
-use crate::plan::SegmentKind;
+use crate::plan::{GripperAction, GripperEvent, LinePoses, SegmentKind};
 use akl_tsr::WORLD_FRAME;
 use std::time::Instant;
 

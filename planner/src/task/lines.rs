@@ -1,34 +1,17 @@
 //! Reaching a keyframe along a straight line (`move_in_line`), planning a line ahead, and
 //! checking a timed line against its line.
 
-use super::centred_in_hand;
-use super::grasp_width;
-use super::line_error;
-use super::Event;
-use super::Holding;
-use super::PlannedLine;
-use super::Planner;
-use crate::collision::Checker;
-use crate::collision::Held;
-use crate::collision::Scene;
-use crate::contact_rules::Allowances;
-use crate::contact_rules::Step;
-use crate::contact_rules::ENTRY_CLEARANCE;
+use super::{centred_in_hand, grasp_width, line_error, Event, Holding, PlannedLine, Planner};
+use crate::collision::{Checker, Held, Scene};
+use crate::contact_rules::{Allowances, Step, ENTRY_CLEARANCE};
 use crate::error::PlanError;
 use crate::goal::GoalStrategy;
-use crate::line::distance_to_segment;
-use crate::line::plan_line;
-use crate::line::LineFailure;
-use crate::line::LineOptions;
-use crate::parry_convert;
-use crate::plan::LinePoses;
-use crate::plan::SegmentKind;
+use crate::line::{distance_to_segment, plan_line, LineFailure, LineOptions};
+use crate::plan::{LinePoses, SegmentKind};
 use crate::space::Space;
-use crate::timing;
 use crate::timing::Timing;
-use akl_tsr::Gripper;
-use akl_tsr::Keyframe;
-use akl_tsr::Pose;
+use crate::{parry_convert, timing};
+use akl_tsr::{Gripper, Keyframe, Pose};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 

@@ -1,12 +1,9 @@
 //! The plan as it grows: timed segments and gripper events appended in order.
 
-use super::PlannedLine;
-use super::Planner;
+use super::{PlannedLine, Planner};
 use crate::contact_rules::Allowances;
 use crate::error::PlanError;
-use crate::plan::LinePoses;
-use crate::plan::Segment;
-use crate::plan::SegmentKind;
+use crate::plan::{LinePoses, Segment, SegmentKind};
 use crate::timing;
 use crate::timing::Timing;
 
