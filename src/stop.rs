@@ -4,7 +4,7 @@
 //! signal exits at once with 130. A reader that goes away (`akl ... | head`) ends it quietly.
 //!
 //! A command that runs trials passes [`interrupt`] down in its execution options
-//! (`akl_exec::trial::ExecOptions::interrupt`): every batch run with them then stops starting
+//! (`akl_exec::ExecOptions::interrupt`): every batch run with them then stops starting
 //! trials once the flag is up (see `akl_exec::interrupt`). It reports what finished and exits
 //! with [`crate::exit::INTERRUPTED`] ([`crate::exit::CliError::interrupted`]).
 

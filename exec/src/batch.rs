@@ -8,9 +8,11 @@
 //! way finish, and the report covers the trials that finished, in trial order.
 
 use crate::error::ExecError;
+use crate::options::{ExecOptions, Setup};
 use crate::report::{BatchReport, Settings, TrialReport};
+use crate::timeline::Timeline;
 use crate::trace::{write_trace, TraceInput, TRACE_RATE};
-use crate::trial::{run_trial, trial_world, ExecOptions, Setup, Timeline};
+use crate::trial::{run_trial, trial_world};
 use akl_planner::Robot;
 use akl_scene::{Task, World};
 use akl_tsr::TaskSpec;

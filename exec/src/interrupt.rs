@@ -2,7 +2,7 @@
 //! flag, batches start no more trials, the trials under way finish, and the command reports
 //! what finished.
 //!
-//! The flag travels in [`crate::trial::ExecOptions::interrupt`], so everything that runs
+//! The flag travels in [`crate::options::ExecOptions::interrupt`], so everything that runs
 //! batches with those options (execution, the grounding check, validation, relaxation,
 //! comparison) stops starting trials without being handed the flag again. A batch run once the
 //! flag is up runs no trial at all and says it was interrupted

@@ -9,10 +9,15 @@ pub mod convert;
 pub mod error;
 pub mod grasp;
 pub mod interrupt;
+pub mod options;
 pub mod perception;
 pub mod report;
 pub mod settle;
 pub mod simulate;
+pub mod timeline;
 pub mod trace;
 pub mod trial;
 pub mod world;
+
+pub use options::{ExecOptions, Setup};
+pub use timeline::{Frame, Timeline};

@@ -554,7 +554,7 @@ mod tests {
             1.0,
             crate::batch::settings(
                 &akl_planner::Robot::panda().unwrap(),
-                &crate::trial::ExecOptions::default(),
+                &crate::options::ExecOptions::default(),
                 &akl_scene::builtin::task("inspection")
                     .unwrap()
                     .unwrap()

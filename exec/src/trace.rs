@@ -19,7 +19,7 @@
 
 use crate::error::ExecError;
 use crate::report::TrialReport;
-use crate::trial::{Frame, Timeline};
+use crate::timeline::{Frame, Timeline};
 use akl_planner::collision::{Checker, RobotCollision, Scene};
 use akl_planner::contact_rules::Step;
 use akl_planner::{Geometry, GripperAction, Robot};
@@ -716,7 +716,7 @@ fn events(input: &TraceInput, channel: u16) -> Vec<(f64, u16, Value)> {
 mod tests {
     use super::*;
     use crate::batch::{Batch, BatchOptions};
-    use crate::trial::ExecOptions;
+    use crate::options::ExecOptions;
 
     /// Runs one randomized trial of `spec` on inspection (seed 3), writes its trace to a
     /// scratch file named after `name`, and reads it back: the report, the frames recorded, and

@@ -1,147 +1,19 @@
 //! One trial: perceive the world, plan the spec on what was perceived, simulate the plan in the
 //! true world, and judge what the simulation measured.
 
-use crate::arm::Drives;
-use crate::checks::keyframe::KeyframeSlack;
 use crate::checks::{collision, goals, grasp, keyframe, line, release, slip};
-use crate::contacts::{ContactLimits, ContactPoint};
-use crate::grasp::GraspLimits;
-use crate::interrupt::Interrupt;
-use crate::perception::{perceive, PoseNoise};
+use crate::options::Setup;
+use crate::perception::perceive;
 use crate::report::{rank, Cause, Failure, Tracking, TrialReport};
 use crate::settle::check_settles;
 use crate::simulate::simulate;
+use crate::timeline::Timeline;
 use crate::world::Physics;
-use akl_planner::{plan_task, Plan, PlanError, PlanOptions, Robot};
+use akl_planner::{plan_task, PlanError, PlanOptions};
 use akl_scene::{Task, World};
-use akl_tsr::{Pose, PoseJson, TaskSpec};
+use akl_tsr::PoseJson;
 use std::collections::BTreeMap;
 use std::time::Instant;
-
-/// Settings of execution.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ExecOptions {
-    /// Simulation settings.
-    pub physics: Physics,
-    /// Planner settings (the seed is replaced by each trial's).
-    pub plan: PlanOptions,
-    /// The simulated joint servos and gripper.
-    pub drives: Drives,
-    /// What counts as a sound grasp.
-    pub grasp: GraspLimits,
-    /// How deep and hard contacts may be.
-    pub contacts: ContactLimits,
-    /// Perception error of the movable objects' poses.
-    pub noise: PoseNoise,
-    /// How far the TCP may leave a `move_in_line` segment's line (metres).
-    pub line_tolerance: f64,
-    /// How far a held object may move in the hand (metres).
-    pub slip_limit: f64,
-    /// How far a released object may fall (metres).
-    pub drop_limit: f64,
-    /// Simulated seconds of settling after the plan, before the goals are checked.
-    pub settle: f64,
-    /// Longest settling (simulated seconds after the plan): past `settle`, the simulation goes
-    /// on while an object still moves faster than `rest_speed`, up to this. A part that rocks
-    /// for a moment in a clamp is then judged at rest, as a person would wait for it, while an
-    /// object that never comes to rest still fails the rest check.
-    pub settle_max: f64,
-    /// Speed below which an object counts as at rest (m/s; ten times that in rad/s).
-    pub rest_speed: f64,
-    /// Samples per simulated second of the objects' paths.
-    pub path_rate: f64,
-    /// Raised to stop part-way (Ctrl-C): once it is, batches start no more trials (see
-    /// [`crate::interrupt`]). Never raised by default. Not a setting of the trials themselves:
-    /// it changes which trials run, never what one of them gives.
-    pub interrupt: Interrupt,
-}
-
-impl Default for ExecOptions {
-    fn default() -> Self {
-        ExecOptions {
-            physics: Physics::default(),
-            plan: PlanOptions::default(),
-            drives: Drives::default(),
-            grasp: GraspLimits::default(),
-            contacts: ContactLimits::default(),
-            noise: PoseNoise::default(),
-            line_tolerance: 0.005,
-            slip_limit: 0.005,
-            drop_limit: 0.02,
-            settle: 0.5,
-            settle_max: 2.0,
-            rest_speed: 0.01,
-            path_rate: 240.0,
-            interrupt: Interrupt::NEVER,
-        }
-    }
-}
-
-impl ExecOptions {
-    /// The slack of the keyframe check: the simulation's plus four standard deviations of
-    /// the perception error.
-    pub fn keyframe_slack(&self) -> KeyframeSlack {
-        KeyframeSlack::with_perception(self.noise.position, self.noise.yaw)
-    }
-}
-
-/// What a trial needs besides its world: the robot, the task and the spec.
-#[derive(Debug, Clone, Copy)]
-pub struct Setup<'a> {
-    /// The robot.
-    pub robot: &'a Robot,
-    /// The task (its nominal world, goals and ranges).
-    pub task: &'a Task,
-    /// The spec executed.
-    pub spec: &'a TaskSpec,
-    /// Settings.
-    pub options: &'a ExecOptions,
-}
-
-/// One instant of a simulation, for a trace.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Frame {
-    /// Simulated time (seconds).
-    pub t: f64,
-    /// World pose of every robot link, in the robot's link order.
-    pub links: Vec<Pose>,
-    /// World pose of every object, in the task's order.
-    pub objects: Vec<Pose>,
-    /// The simulated arm joint positions.
-    pub joints: Vec<f64>,
-    /// The simulated gripper opening (metres).
-    pub width: f64,
-    /// Contacts of the arm and the held object since the previous frame.
-    pub contacts: Vec<ContactPoint>,
-}
-
-/// A trial as a trace shows it: the worlds, the plan, and the simulation's frames.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Timeline {
-    /// Frames per simulated second.
-    pub rate: f64,
-    /// The frames, in time order (none when planning failed).
-    pub frames: Vec<Frame>,
-    /// The plan executed, when there was one.
-    pub plan: Option<Plan>,
-    /// The world the planner perceived.
-    pub perceived: Option<World>,
-    /// Why planning failed, when it did.
-    pub planning_failure: Option<String>,
-}
-
-impl Timeline {
-    /// An empty timeline recording `rate` frames per simulated second.
-    pub fn new(rate: f64) -> Timeline {
-        Timeline {
-            rate,
-            frames: Vec::new(),
-            plan: None,
-            perceived: None,
-            planning_failure: None,
-        }
-    }
-}
 
 /// The cause a planning error counts under.
 pub fn plan_cause(e: &PlanError) -> Cause {

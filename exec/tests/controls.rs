@@ -5,7 +5,7 @@
 use akl_exec::arm::Drives;
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::report::{BatchReport, Cause};
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::{builtin, Task};
 use akl_stats::{Decision, Gate, GateOptions};
@@ -297,7 +297,7 @@ fn the_assembly_without_its_line_makes_the_pipe_hit_the_clamp() {
 #[test]
 fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
     use akl_exec::simulate::simulate;
-    use akl_exec::trial::Setup;
+    use akl_exec::Setup;
     use akl_tsr::nalgebra::Translation3;
     let robot = Robot::panda().unwrap();
     let t = task("pick_place");
@@ -346,7 +346,7 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
 /// in the hand), and what happened, for the message.
 fn insertion_into_a_clamp_moved_by(offset: f64) -> (bool, String) {
     use akl_exec::simulate::simulate;
-    use akl_exec::trial::Setup;
+    use akl_exec::Setup;
     use akl_tsr::nalgebra::Translation3;
     let robot = Robot::panda().unwrap();
     let t = task("assembly");

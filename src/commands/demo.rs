@@ -10,7 +10,7 @@ use super::teach::{
 use crate::cli::{DemoArgs, RobotArg};
 use crate::exit::{CliError, CliResult};
 use crate::table::Table;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_learn::calibration::Calibration;
 use akl_learn::measures::{score, Tolerance};
 

@@ -12,7 +12,7 @@ use akl_eval::summary::{
     summarize, Summary, TABLE_ORDER, THESIS_CONSTRAINT_ERRORS, THESIS_SUCCESS,
 };
 use akl_exec::batch::{Batch, BatchOptions};
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::{builtin, Task};
 use akl_tsr::TaskSpec;

@@ -10,7 +10,7 @@ use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::error::ExecError;
 use akl_exec::perception::PoseNoise;
 use akl_exec::report::{BatchReport, Cause};
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::PlanBudget;
 use akl_planner::{PlanOptions, Robot};
 use akl_scene::Task;

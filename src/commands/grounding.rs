@@ -6,7 +6,7 @@ use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
 use akl_exec::error::ExecError;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_stats::interval::percent;

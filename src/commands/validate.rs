@@ -10,7 +10,7 @@ use crate::table::Table;
 use akl_exec::batch::{settings, Batch, BatchOptions};
 use akl_exec::error::ExecError;
 use akl_exec::report::BatchReport;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::{Demo, LearnOptions};

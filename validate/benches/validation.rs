@@ -8,7 +8,7 @@
 //! the trials it ran and their cost in baseline trials. Run with
 //! `cargo bench -p akl-validate --bench validation`.
 
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::builtin;
 use akl_stats::GateOptions;

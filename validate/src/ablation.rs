@@ -15,7 +15,7 @@
 
 use crate::trials::{run_gated, Outcome};
 use crate::ValidateError;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_stats::{Decision, Gate};

@@ -27,7 +27,7 @@
 
 use crate::trials::{run_gated, Gated, Outcome};
 use crate::ValidateError;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_learn::baselines::kd::marked_frames;
 use akl_learn::dialogue::{AnswerSource, DialogueError, Question};
 use akl_learn::teach::{session_header, stream_demo, Pace};

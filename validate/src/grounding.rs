@@ -27,7 +27,7 @@
 use crate::trials::run_gated;
 use akl_exec::error::ExecError;
 use akl_exec::report::Cause;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_stats::{Decision, Gate, GateOptions, PassRate};

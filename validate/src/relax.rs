@@ -26,7 +26,7 @@
 use crate::trials::{run_gated, run_gated_to_pass, verifying, Outcome};
 use crate::ValidateError;
 use akl_exec::batch::{trial_seed, Batch, BatchOptions};
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::flexibility::{FreedomOptions, Workspace};
 use akl_planner::Robot;
 use akl_scene::Task;

@@ -5,7 +5,7 @@
 use akl_exec::batch::{trial_seed, Batch, BatchOptions};
 use akl_exec::error::ExecError;
 use akl_exec::report::{BatchReport, Cause, TrialReport};
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::goal::GoalStrategy;
 use akl_planner::{PlanBudget, Robot};
 use akl_scene::Task;

@@ -8,7 +8,7 @@ use crate::ablation::{ablate, Ablation, Necessity};
 use crate::answers::{check_answers, AnswerCheck, Answers, DemoSource};
 use crate::trials::{run_gated, Gated};
 use crate::ValidateError;
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_stats::{Decision, Gate, GateOptions};

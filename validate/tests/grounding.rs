@@ -9,7 +9,7 @@
 //! else lands off the mat), and the scanner row turns freely and must be crossed from its first
 //! scanner towards its last (a scan line with an end grounded off the row runs across it).
 
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::builtin;
 use akl_validate::grounding::{check_groundings, GroundingOptions, Verdict};

@@ -4,7 +4,7 @@
 //! confidence: 11 clean trials pass) keeps these tests quick; the default gate's properties
 //! are akl-stats' tests, and the truths pass it in `tests/cli_validate.rs`.
 
-use akl_exec::trial::ExecOptions;
+use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::{builtin, Task};
 use akl_stats::{Decision, GateOptions};

@@ -97,7 +97,7 @@ pub struct Observations {
     pub tracking_max: f64,
     /// Root mean square of that distance over the plan (metres).
     pub tracking_rms: f64,
-    /// Every movable object's path, sampled at [`crate::trial::ExecOptions::path_rate`].
+    /// Every movable object's path, sampled at [`crate::options::ExecOptions::path_rate`].
     pub paths: ObjectPaths,
     /// The world after settling.
     pub settled: Option<World>,
