@@ -5,8 +5,8 @@
 //! commanded once it is reached and the constraint on the segment that ends at it. Specs are
 //! agent independent: nothing here knows about a robot.
 //!
-//! Math types are nalgebra `f64` through `k::nalgebra`, so the whole workspace shares one
-//! nalgebra version with the kinematics crate.
+//! Math types are nalgebra `f64`, of the version the kinematics crate `k` is built on, so the
+//! whole workspace shares one nalgebra.
 
 pub mod error;
 pub mod io;
@@ -23,4 +23,4 @@ pub use spec::{TaskSpec, SPEC_VERSION, WORLD_FRAME};
 pub use tsr::{Bounds, Tsr, ROTATION_WEIGHT};
 
 /// The nalgebra version shared with `k`, re-exported so dependants need no direct dependency.
-pub use k::nalgebra;
+pub use nalgebra;

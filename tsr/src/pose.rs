@@ -1,6 +1,6 @@
 //! Rigid poses and their JSON form `{"p": [x, y, z], "q": [x, y, z, w]}`.
 
-use k::nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// A rigid transform in metres; the pose of a frame expressed in a parent frame.

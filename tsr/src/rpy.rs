@@ -1,6 +1,6 @@
 //! Roll-pitch-yaw angles with R = Rz(yaw)·Ry(pitch)·Rx(roll), the TSR convention.
 
-use k::nalgebra::{Matrix3, Rotation3, UnitQuaternion};
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 use std::f64::consts::PI;
 
 /// The rotation for roll, pitch and yaw (radians), R = Rz(yaw)·Ry(pitch)·Rx(roll).

@@ -6,7 +6,7 @@
 
 use crate::pose::{serde_pose, Pose};
 use crate::rpy::{folded_rpy, rotation_from_rpy, rpy_from_rotation, wrap_angle};
-use k::nalgebra::{Isometry3, Translation3};
+use nalgebra::{Isometry3, Translation3};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
