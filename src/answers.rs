@@ -15,7 +15,7 @@ const TTY: &str = "/dev/tty";
 
 /// The answer source `spec` names: `oracle` (needs the simulated teacher's profile and seed),
 /// `all-yes`, `terminal`, or a comma-separated list of yes / no / unknown.
-pub fn answer_source(
+pub(crate) fn answer_source(
     spec: &str,
     simulated: Option<(&TeacherProfile, u64)>,
 ) -> Result<Box<dyn AnswerSource>, CliError> {

@@ -6,14 +6,14 @@ use std::io::IsTerminal;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A progress bar for `total` trials; workers call [`Progress::tick`] from any thread.
-pub struct Progress {
+pub(crate) struct Progress {
     bar: ProgressBar,
     failed: AtomicUsize,
 }
 
 impl Progress {
     /// A bar titled `label` for `total` trials, shown if standard error is a terminal.
-    pub fn new(label: &str, total: usize) -> Progress {
+    pub(crate) fn new(label: &str, total: usize) -> Progress {
         let target = if std::io::stderr().is_terminal() {
             ProgressDrawTarget::stderr()
         } else {
@@ -36,7 +36,7 @@ impl Progress {
     }
 
     /// Counts one more trial, failed or not.
-    pub fn tick(&self, passed: bool) {
+    pub(crate) fn tick(&self, passed: bool) {
         if !passed {
             let failed = self.failed.fetch_add(1, Ordering::Relaxed) + 1;
             self.bar.set_message(failed.to_string());
@@ -45,17 +45,17 @@ impl Progress {
     }
 
     /// Sets the count of trials done.
-    pub fn set(&self, done: usize) {
+    pub(crate) fn set(&self, done: usize) {
         self.bar.set_position(done as u64);
     }
 
     /// Renames what the bar counts (a new stage of the same run).
-    pub fn relabel(&self, label: &str) {
+    pub(crate) fn relabel(&self, label: &str) {
         self.bar.set_prefix(label.to_string());
     }
 
     /// Erases the bar, leaving the line for what is printed next.
-    pub fn finish(&self) {
+    pub(crate) fn finish(&self) {
         self.bar.finish_and_clear();
     }
 }

@@ -17,7 +17,7 @@ static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Installs the handler of SIGINT and SIGTERM (and SIGHUP) and returns the flag it raises. A
 /// second signal, once the flag is already up, exits at once with 130.
-pub fn on_ctrl_c() -> &'static AtomicBool {
+pub(crate) fn on_ctrl_c() -> &'static AtomicBool {
     // Installing twice fails; the first handler is the one that matters.
     let _ = ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
@@ -29,13 +29,13 @@ pub fn on_ctrl_c() -> &'static AtomicBool {
 
 /// Installs the handler (as [`on_ctrl_c`]) and returns the flag as an [`Interrupt`], to be put
 /// in the execution options of the trials a command runs.
-pub fn interrupt() -> Interrupt {
+pub(crate) fn interrupt() -> Interrupt {
     Interrupt::on(on_ctrl_c())
 }
 
 /// Lets a closed output pipe end the process silently, as it does for other command-line
 /// tools, instead of turning the failed write into a panic. Rust ignores SIGPIPE by default.
-pub fn end_quietly_on_closed_pipe() {
+pub(crate) fn end_quietly_on_closed_pipe() {
     // SAFETY: restoring a signal's default disposition at start-up, before any thread exists.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);

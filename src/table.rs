@@ -1,14 +1,14 @@
 //! Plain-text tables for terminal output.
 
 /// A table with a header row; columns are padded to their widest cell.
-pub struct Table {
+pub(crate) struct Table {
     header: Vec<String>,
     rows: Vec<Vec<String>>,
 }
 
 impl Table {
     /// A table with these column titles.
-    pub fn new<const N: usize>(header: [&str; N]) -> Self {
+    pub(crate) fn new<const N: usize>(header: [&str; N]) -> Self {
         Table {
             header: header.iter().map(|s| s.to_string()).collect(),
             rows: Vec::new(),
@@ -16,12 +16,12 @@ impl Table {
     }
 
     /// Appends a row (cells beyond the header are ignored, missing ones left blank).
-    pub fn row(&mut self, cells: Vec<String>) {
+    pub(crate) fn row(&mut self, cells: Vec<String>) {
         self.rows.push(cells);
     }
 
     /// The table as text, one line per row, columns separated by two spaces.
-    pub fn render(&self) -> String {
+    pub(crate) fn render(&self) -> String {
         let width = |i: usize| {
             std::iter::once(&self.header)
                 .chain(&self.rows)
@@ -52,6 +52,6 @@ impl Table {
 }
 
 /// A vector as `[x, y, z]` with millimetre precision.
-pub fn vec3(v: &akl_tsr::nalgebra::Vector3<f64>) -> String {
+pub(crate) fn vec3(v: &akl_tsr::nalgebra::Vector3<f64>) -> String {
     format!("[{:.3}, {:.3}, {:.3}]", v.x, v.y, v.z)
 }

@@ -10,13 +10,13 @@ use std::io::Read;
 use std::os::fd::AsRawFd;
 
 /// A terminal device read one keystroke at a time.
-pub struct KeyReader {
+pub(crate) struct KeyReader {
     tty: File,
 }
 
 impl KeyReader {
     /// Reads keys from `tty` (an open terminal device).
-    pub fn new(tty: File) -> Self {
+    pub(crate) fn new(tty: File) -> Self {
         KeyReader { tty }
     }
 }

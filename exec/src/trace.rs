@@ -239,7 +239,7 @@ mod schema {
     }
 
     /// `foxglove.FrameTransforms`.
-    pub fn frame_transforms() -> Value {
+    pub(super) fn frame_transforms() -> Value {
         titled(
             "foxglove.FrameTransforms",
             object(json!({"transforms": array(object(json!({
@@ -249,7 +249,7 @@ mod schema {
     }
 
     /// `foxglove.SceneUpdate`.
-    pub fn scene_update() -> Value {
+    pub(super) fn scene_update() -> Value {
         let cylinder = object(
             json!({"pose": pose(), "size": vec3(), "bottom_scale": number(),
             "top_scale": number(), "color": color()}),
@@ -283,7 +283,7 @@ mod schema {
     }
 
     /// The simulated joints: names, positions and the gripper opening.
-    pub fn joint_state() -> Value {
+    pub(super) fn joint_state() -> Value {
         titled(
             "akl.JointState",
             object(json!({"timestamp": time(), "name": array(string()),
@@ -292,7 +292,7 @@ mod schema {
     }
 
     /// `foxglove.Log`.
-    pub fn log() -> Value {
+    pub(super) fn log() -> Value {
         titled(
             "foxglove.Log",
             object(json!({"timestamp": time(), "level": {"type": "integer"},

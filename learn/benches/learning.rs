@@ -3,6 +3,8 @@
 //! on OKL's fitting-error signals against its worst case.
 //!
 //! Run with `cargo bench -p akl-learn --bench learning`; results are in BENCHMARKS.md.
+// `criterion_group!` generates a public function without documentation.
+#![allow(missing_docs)]
 
 use akl_learn::calibration::Calibration;
 use akl_learn::demo::Answer;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 /// `akl robot ...`
 #[derive(Debug, Subcommand)]
-pub enum RobotCommand {
+pub(crate) enum RobotCommand {
     /// Show the robot: joints, limits, ready pose, gripper, links and collision margins.
     Info {
         #[command(flatten)]
@@ -49,7 +49,7 @@ pub enum RobotCommand {
 
 /// `akl task ...`
 #[derive(Debug, Subcommand)]
-pub enum TaskCommand {
+pub(crate) enum TaskCommand {
     /// List the built-in tasks.
     List {
         /// Print JSON instead of a table.
@@ -70,7 +70,7 @@ pub enum TaskCommand {
 
 /// `akl spec ...`
 #[derive(Debug, Subcommand)]
-pub enum SpecCommand {
+pub(crate) enum SpecCommand {
     /// Validate a spec and summarize it: keyframes, kinds, references and constraints.
     ///
     /// References are checked against the objects of the task named in the spec when it is a

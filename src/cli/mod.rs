@@ -5,10 +5,10 @@ mod shared;
 mod teaching;
 mod verify;
 
-pub use inspect::*;
-pub use shared::*;
-pub use teaching::*;
-pub use verify::*;
+pub(crate) use inspect::*;
+pub(crate) use shared::*;
+pub(crate) use teaching::*;
+pub(crate) use verify::*;
 
 use clap::{Parser, Subcommand};
 
@@ -16,7 +16,7 @@ use clap::{Parser, Subcommand};
 /// sequence of Task Space Region keyframes, and check the learned spec before it runs.
 #[derive(Debug, Parser)]
 #[command(name = "akl", version, about, long_about = None)]
-pub struct Cli {
+pub(crate) struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -24,7 +24,7 @@ pub struct Cli {
 
 /// The top-level commands.
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// List and inspect tasks (built-in or from a task file).
     #[command(subcommand)]
     Task(TaskCommand),

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 /// `--speed-scale S`, shared by the commands that plan.
 #[derive(Debug, Clone, Copy, clap::Args)]
-pub struct SpeedArg {
+pub(crate) struct SpeedArg {
     /// How fast the arm may move, in (0, 1]: joint velocity limits times S, accelerations
     /// times S² (MoveIt's scaling factors S and S²), fingers at S times their speed, the pause
     /// after the gripper 1/S as long: the whole plan takes 1/S as long. 1 (the default) moves
@@ -22,7 +22,7 @@ fn parse_speed_scale(text: &str) -> Result<f64, String> {
 
 /// `--any-task`, shared by the commands that run a spec in a task.
 #[derive(Debug, Clone, Copy, clap::Args)]
-pub struct AnyTaskArg {
+pub(crate) struct AnyTaskArg {
     /// Run the spec even though its `task` field names another task than --task (refused by
     /// default: a spec given another task's world is almost always a mistake).
     #[arg(long)]
@@ -31,7 +31,7 @@ pub struct AnyTaskArg {
 
 /// `--robot DIR`, shared by the commands that use a robot.
 #[derive(Debug, Clone, clap::Args)]
-pub struct RobotArg {
+pub(crate) struct RobotArg {
     /// Robot folder (robot.toml and its URDF); the built-in Franka Panda if omitted.
     #[arg(long, value_name = "DIR")]
     pub robot: Option<PathBuf>,
@@ -39,7 +39,7 @@ pub struct RobotArg {
 
 /// Trial settings shared by `akl validate`, `relax` and `compare`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct TrialArgs {
+pub(crate) struct TrialArgs {
     /// Trials run in parallel (default: the number of cores).
     #[arg(long, value_name = "J")]
     pub jobs: Option<usize>,
@@ -52,7 +52,7 @@ pub struct TrialArgs {
 
 /// What the deployment gate asks (shared by `akl validate`, `relax` and `compare`).
 #[derive(Debug, Clone, Copy, clap::Args)]
-pub struct GateArgs {
+pub(crate) struct GateArgs {
     /// The success probability the spec must be shown to reach.
     #[arg(long, value_name = "P", default_value_t = 0.99)]
     pub min_success: f64,
@@ -67,7 +67,7 @@ pub struct GateArgs {
 
 /// `--pose-noise MM,DEG`: standard deviations of perceived position (mm) and yaw (degrees).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PoseNoiseArg {
+pub(crate) struct PoseNoiseArg {
     /// Millimetres.
     pub millimetres: f64,
     /// Degrees.

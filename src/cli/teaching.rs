@@ -10,7 +10,7 @@ logistic model of the switching probability (β0, β1) is fitted to them by maxi
 and the energy tank's dissipation T_d and threshold T_s follow from the fitted model on the same \
 data. Without a calibration, `akl teach` uses the one fitted to the simulated default teacher."
 )]
-pub struct CalibrateArgs {
+pub(crate) struct CalibrateArgs {
     /// Demonstration of a straight line (JSONL or MCAP).
     #[arg(
         long,
@@ -44,7 +44,7 @@ pub struct CalibrateArgs {
 
 /// Who demonstrates in `akl teach`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Teacher {
+pub(crate) enum Teacher {
     /// The simulated teacher, following the task's teaching steps.
     Sim,
     /// A robot driver streaming JSONL frames on standard input.
@@ -63,7 +63,7 @@ The recording streams into OUTPUT.partial and is renamed to OUTPUT when complete
 recording leaves OUTPUT.partial, which `akl learn` reads up to its last second. Ctrl-C ends a \
 recording cleanly. The spec learned with AKL is written next to it as <OUTPUT stem>.spec.json."
 )]
-pub struct TeachArgs {
+pub(crate) struct TeachArgs {
     /// Task: a built-in name or a task file (required with --teacher sim).
     #[arg(long)]
     pub task: Option<String>,
@@ -103,7 +103,7 @@ pub struct TeachArgs {
 from another driver) is first replayed through it for AKL; its questions are answered by \
 --answers (all-yes, terminal or a list such as yes,no)."
 )]
-pub struct LearnArgs {
+pub(crate) struct LearnArgs {
     /// The demonstration (JSONL or MCAP, also a .partial file of a killed recording).
     pub demo: PathBuf,
     /// Learning method: akl, kd or macl.
@@ -164,7 +164,7 @@ matches when kind, reference, gripper and constraint agree, a pose when its targ
 intersection over union; constraint accuracy compares line lengths. Success means the learned \
 spec equals the truth. Exit code 0 whatever the score."
 )]
-pub struct ScoreArgs {
+pub(crate) struct ScoreArgs {
     /// The learned spec.
     pub spec: PathBuf,
     /// The ground truth: a spec file, or a built-in task name for its ground truth.

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 /// `akl plan SPEC --task T ...`
 #[derive(Debug, clap::Args)]
-pub struct PlanArgs {
+pub(crate) struct PlanArgs {
     /// The spec file to plan.
     pub spec: PathBuf,
     /// Task (built-in name or task file) whose world the spec is planned in.
@@ -40,7 +40,7 @@ pub struct PlanArgs {
 
 /// `akl flexibility SPEC --task T ...`
 #[derive(Debug, clap::Args)]
-pub struct FlexibilityArgs {
+pub(crate) struct FlexibilityArgs {
     /// The spec file to measure.
     pub spec: PathBuf,
     /// Task (built-in name or task file) whose world the spec is measured in.
@@ -68,7 +68,7 @@ pub struct FlexibilityArgs {
 
 /// `akl validate SPEC --task T ...`
 #[derive(Debug, clap::Args)]
-pub struct ValidateArgs {
+pub(crate) struct ValidateArgs {
     /// The spec file to validate.
     pub spec: PathBuf,
     /// Task (built-in name or task file) whose world the spec runs in.
@@ -109,7 +109,7 @@ pub struct ValidateArgs {
 
 /// `akl relax SPEC --task T -o relaxed.json`
 #[derive(Debug, clap::Args)]
-pub struct RelaxArgs {
+pub(crate) struct RelaxArgs {
     /// The spec file to relax.
     pub spec: PathBuf,
     /// Task (built-in name or task file) whose world the spec runs in.
@@ -139,7 +139,7 @@ pub struct RelaxArgs {
 
 /// `akl compare SPEC... --task T`
 #[derive(Debug, clap::Args)]
-pub struct CompareArgs {
+pub(crate) struct CompareArgs {
     /// The spec files to compare.
     #[arg(required = true)]
     pub specs: Vec<PathBuf>,
@@ -170,7 +170,7 @@ pub struct CompareArgs {
 
 /// `akl execute SPEC --task T ...`
 #[derive(Debug, clap::Args)]
-pub struct ExecuteArgs {
+pub(crate) struct ExecuteArgs {
     /// The spec file to execute.
     pub spec: PathBuf,
     /// Task (built-in name or task file) whose world the spec runs in.
@@ -233,7 +233,7 @@ pub struct ExecuteArgs {
 
 /// Where `akl execute` aims within the keyframes' TSRs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Goals {
+pub(crate) enum Goals {
     /// At each TSR's nominal pose when reachable.
     Nominal,
     /// Drawn at random across each TSR, as validation plans.
@@ -242,7 +242,7 @@ pub enum Goals {
 
 /// `akl demo`
 #[derive(Debug, clap::Args)]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     /// Built-in task (see `akl task list`) or task file to teach.
     #[arg(long, default_value = "inspection")]
     pub task: String,
@@ -264,7 +264,7 @@ pub struct DemoArgs {
 
 /// `akl eval`
 #[derive(Debug, clap::Args)]
-pub struct EvalArgs {
+pub(crate) struct EvalArgs {
     /// Number of simulated participants (the thesis had 12).
     #[arg(long, default_value_t = 12)]
     pub participants: usize,

@@ -21,7 +21,7 @@ struct Report {
     separation: Separation,
 }
 
-pub fn run(args: CalibrateArgs) -> CliResult {
+pub(super) fn run(args: CalibrateArgs) -> CliResult {
     super::check_output(&args.output, "calibration")?;
     let (line, circle, source) = if args.simulate {
         let profile = super::profile(&args.profile)?;

@@ -26,7 +26,7 @@ struct Compared {
     rows: Vec<Row>,
 }
 
-pub fn run(args: CompareArgs) -> CliResult {
+pub(super) fn run(args: CompareArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;
     let specs = args

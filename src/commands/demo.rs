@@ -14,7 +14,7 @@ use akl_exec::ExecOptions;
 use akl_learn::calibration::Calibration;
 use akl_learn::measures::{score, Tolerance};
 
-pub fn run(args: DemoArgs) -> CliResult {
+pub(super) fn run(args: DemoArgs) -> CliResult {
     if args.trials == 0 {
         return Err(CliError::input("--trials: needs at least one trial"));
     }

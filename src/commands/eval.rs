@@ -61,7 +61,7 @@ struct Evaluated<'a> {
     trials: Vec<&'a Trial>,
 }
 
-pub fn run(args: EvalArgs) -> CliResult {
+pub(super) fn run(args: EvalArgs) -> CliResult {
     if args.participants == 0 {
         return Err(CliError::input("--participants: needs at least one"));
     }

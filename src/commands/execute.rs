@@ -66,7 +66,7 @@ pub(crate) struct Executed {
     pub report: BatchReport,
 }
 
-pub fn run(args: ExecuteArgs) -> CliResult {
+pub(super) fn run(args: ExecuteArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;
     let spec = super::load_spec_for(&args.spec, &task, args.fit)?;

@@ -30,7 +30,7 @@ fn seconds(v: Option<f64>) -> String {
     v.map_or("-".to_string(), |v| format!("{v:.2} s"))
 }
 
-pub fn run(args: FlexibilityArgs) -> CliResult {
+pub(super) fn run(args: FlexibilityArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;
     let spec = super::load_spec_for(&args.spec, &task, args.fit)?;

@@ -17,7 +17,7 @@ use std::path::Path;
 /// Runs the check, each alternative judged by the gate of `options`, and prints it;
 /// interrupted (`exec.interrupt`), it prints what it measured and exits 130.
 #[allow(clippy::too_many_arguments)]
-pub fn run(
+pub(super) fn run(
     robot: &Robot,
     task: &Task,
     spec: &TaskSpec,

@@ -25,7 +25,7 @@ struct Learned<'a> {
     spec: &'a TaskSpec,
 }
 
-pub fn run(args: LearnArgs) -> CliResult {
+pub(super) fn run(args: LearnArgs) -> CliResult {
     let method: Method = args.method.parse().map_err(CliError::input)?;
     let bounds = parse_bounds(&args.bounds)?;
     if let Some(out) = &args.output {

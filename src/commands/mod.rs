@@ -28,7 +28,7 @@ use akl_tsr::{FileError, TaskSpec};
 use std::path::Path;
 
 /// Runs the parsed command line.
-pub fn run(cli: Cli) -> CliResult {
+pub(crate) fn run(cli: Cli) -> CliResult {
     match cli.command {
         Command::Task(cmd) => task::run(cmd),
         Command::Spec(cmd) => spec::run(cmd),

@@ -48,7 +48,7 @@ struct PlanSummary {
     output: Option<String>,
 }
 
-pub fn run(args: PlanArgs) -> CliResult {
+pub(super) fn run(args: PlanArgs) -> CliResult {
     if let Some(out) = &args.output {
         super::check_output(out, "plan")?;
     }

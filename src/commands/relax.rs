@@ -24,7 +24,7 @@ struct Relaxed<'a> {
     relaxation: &'a Relaxation,
 }
 
-pub fn run(args: RelaxArgs) -> CliResult {
+pub(super) fn run(args: RelaxArgs) -> CliResult {
     check_output(&args.output, "relaxed spec")?;
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;

@@ -9,7 +9,7 @@ use akl_tsr::rpy::rpy_from_rotation;
 use akl_tsr::{Pose, PoseJson};
 use serde::Serialize;
 
-pub fn run(cmd: RobotCommand) -> CliResult {
+pub(super) fn run(cmd: RobotCommand) -> CliResult {
     match cmd {
         RobotCommand::Info { robot, json } => info(&robot, json),
         RobotCommand::Fk {

@@ -8,7 +8,7 @@ use akl_scene::builtin;
 use akl_tsr::TaskSpec;
 use std::path::Path;
 
-pub fn run(args: ScoreArgs) -> CliResult {
+pub(super) fn run(args: ScoreArgs) -> CliResult {
     let learned = TaskSpec::load(&args.spec).map_err(CliError::input)?;
     let truth = load_truth(&args.truth)?;
     let s = score(&learned, &truth, &Tolerance::default());

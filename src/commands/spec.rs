@@ -10,7 +10,7 @@ use akl_tsr::{Constraint, FileError, KeyframeKind, TaskSpec};
 use serde::Serialize;
 use std::path::Path;
 
-pub fn run(cmd: SpecCommand) -> CliResult {
+pub(super) fn run(cmd: SpecCommand) -> CliResult {
     match cmd {
         SpecCommand::Check { file, task, json } => check(&file, task.as_deref(), json),
         SpecCommand::Show { file, json } => show(&file, json),

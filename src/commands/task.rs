@@ -8,7 +8,7 @@ use akl_scene::{builtin, Motion, Task};
 use akl_tsr::rpy::rpy_from_rotation;
 use serde::Serialize;
 
-pub fn run(cmd: TaskCommand) -> CliResult {
+pub(super) fn run(cmd: TaskCommand) -> CliResult {
     match cmd {
         TaskCommand::List { json } => list(json),
         TaskCommand::Show { task, json } => show(&task, json),

@@ -43,7 +43,7 @@ pub(crate) struct Summary {
     learn_error: Option<String>,
 }
 
-pub fn run(args: TeachArgs) -> CliResult {
+pub(super) fn run(args: TeachArgs) -> CliResult {
     let (calibration, label) = load_calibration(args.calibration.as_deref())?;
     let stop = on_ctrl_c();
     let (demo, recording, stopped, task) = match args.teacher {

@@ -134,7 +134,7 @@ fn replay_command(args: &ValidateArgs, seed: u64) -> String {
     command + &format!(" --trace trial-{seed}.mcap")
 }
 
-pub fn run(args: ValidateArgs) -> CliResult {
+pub(super) fn run(args: ValidateArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;
     let spec = load_spec_for(&args.spec, &task, args.fit)?;

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 
 /// Runs `akl args` in `dir` and waits for it.
-pub fn akl_in(dir: &Path, args: &[&str]) -> Output {
+pub(crate) fn akl_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_akl"))
         .args(args)
         .current_dir(dir)
@@ -18,32 +18,32 @@ pub fn akl_in(dir: &Path, args: &[&str]) -> Output {
 }
 
 /// Runs `akl args` at the repository root (where `tasks/` is) and waits for it.
-pub fn akl(args: &[&str]) -> Output {
+pub(crate) fn akl(args: &[&str]) -> Output {
     akl_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
 }
 
 /// Bytes a command wrote, as text.
-pub fn text(bytes: &[u8]) -> String {
+pub(crate) fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// What a command wrote on standard output.
-pub fn stdout(o: &Output) -> String {
+pub(crate) fn stdout(o: &Output) -> String {
     text(&o.stdout)
 }
 
 /// What a command wrote on standard error.
-pub fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     text(&o.stderr)
 }
 
 /// A command's standard output parsed as JSON; a parse failure shows the output.
-pub fn json(o: &Output) -> serde_json::Value {
+pub(crate) fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
 }
 
 /// An empty scratch folder unique to one test of this process.
-pub fn scratch(name: &str) -> PathBuf {
+pub(crate) fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("akl-e2e-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -52,7 +52,7 @@ pub fn scratch(name: &str) -> PathBuf {
 
 /// A pseudo-terminal pair: a child given the slave sees a terminal; the test reads what it
 /// wrote, and types, on the master.
-pub struct Pty {
+pub(crate) struct Pty {
     /// The test's end.
     pub master: std::fs::File,
     /// The child's end.
@@ -60,7 +60,7 @@ pub struct Pty {
 }
 
 /// Opens a new pseudo-terminal pair.
-pub fn open_pty() -> Pty {
+pub(crate) fn open_pty() -> Pty {
     let (mut master, mut slave) = (0, 0);
     // SAFETY: openpty writes two new file descriptors into the pointers given.
     let rc = unsafe {
@@ -84,7 +84,7 @@ pub fn open_pty() -> Pty {
 
 /// A JSONL stream a robot driver would send: the frames and keyframe marks of a simulated
 /// teaching, without the learner's own detector states and dialogue.
-pub fn driver_stream(dir: &Path, task: &str) -> String {
+pub(crate) fn driver_stream(dir: &Path, task: &str) -> String {
     let o = akl_in(
         dir,
         &[
@@ -114,7 +114,7 @@ pub fn driver_stream(dir: &Path, task: &str) -> String {
 
 /// Starts `akl args` in `dir` with `pty` as its controlling terminal (so it can ask on
 /// /dev/tty) and piped standard streams.
-pub fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
+pub(crate) fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
     use std::os::fd::AsRawFd;
     use std::os::unix::process::CommandExt;
     let slave = pty.slave.as_raw_fd();
@@ -138,7 +138,7 @@ pub fn spawn_on_tty(dir: &Path, args: &[&str], pty: &Pty) -> Child {
 
 /// A live teaching session (`akl teach --teacher stdin --json`) fed the inspection task's
 /// driver stream, with its questions on a pseudo-terminal, stopped at its first question.
-pub struct Asked {
+pub(crate) struct Asked {
     /// The running `akl`.
     pub child: Child,
     /// The terminal it asks on.
@@ -151,7 +151,7 @@ pub struct Asked {
 
 /// Starts a live teaching session in `dir` recording to `output` and reads the terminal up to
 /// the first answer prompt.
-pub fn teach_until_asked(dir: &Path, output: &str) -> Asked {
+pub(crate) fn teach_until_asked(dir: &Path, output: &str) -> Asked {
     use std::io::{Read, Write};
     let stream = driver_stream(dir, "inspection");
     let mut pty = open_pty();

@@ -56,7 +56,7 @@ mod rand_distr_free {
     use rand::Rng;
 
     /// One draw from N(0, 1).
-    pub fn gaussian<R: Rng>(rng: &mut R) -> f64 {
+    pub(super) fn gaussian<R: Rng>(rng: &mut R) -> f64 {
         let u: f64 = rng.gen_range(f64::EPSILON..1.0);
         let v: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
         (-2.0 * u.ln()).sqrt() * v.cos()

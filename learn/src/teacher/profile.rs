@@ -53,7 +53,7 @@ pub struct TeacherProfile {
 }
 
 /// Highest supported recording rate (Hz).
-pub const MAX_RATE: f64 = 1000.0;
+pub(super) const MAX_RATE: f64 = 1000.0;
 
 impl TeacherProfile {
     /// The careful teacher: no unintended lines, correct answers, marks every keyframe the task
