@@ -20,7 +20,6 @@
 //! depends on how the arm would have moved after it.
 
 use crate::convert::{link_collider, to_sim};
-use crate::grasp::PadReading;
 use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
 use akl_planner::fk::{Drive, Motion};
 use akl_planner::hand::{HandModel, LocalBox};
@@ -41,6 +40,35 @@ pub const FRANKA_HAND_FORCE: f64 = 70.0;
 
 /// Largest force the Franka Hand can exert (N), briefly.
 pub const FRANKA_HAND_MAX_FORCE: f64 = 140.0;
+
+/// Largest gap (metres) between a pad and an object for the pad to touch it.
+pub const PAD_CONTACT: f64 = 5e-4;
+
+/// What one pad touches: the nearest object, how far it is, and how hard the pad pushes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PadReading {
+    /// The nearest object (index), among those within rapier's contact prediction of the pad.
+    pub object: Option<usize>,
+    /// Its distance from the pad, from the exact shapes at their current poses (metres;
+    /// infinite when nothing is near).
+    pub gap: f64,
+    /// Force of the pad's contacts in the last step (N).
+    pub force: f64,
+}
+
+impl PadReading {
+    /// A pad with nothing near it.
+    pub const NOTHING: PadReading = PadReading {
+        object: None,
+        gap: f64::INFINITY,
+        force: 0.0,
+    };
+
+    /// Whether the pad touches its nearest object ([`PAD_CONTACT`]).
+    pub fn touches(&self) -> bool {
+        self.object.is_some() && self.gap <= PAD_CONTACT
+    }
+}
 
 /// Gains and limits of the simulated joint servos and gripper.
 #[derive(Debug, Clone, PartialEq)]

@@ -7,7 +7,7 @@
 //! iterations), 20 mm at 1/480 s and 7 mm at 1/960 s; with contacts 16 times stiffer the pads
 //! stay within 0.3 mm but the block falls out. A 5 mm slip limit would fail sound grasps, so
 //! the simulation welds the object to the hand instead — only when the grasp is sound:
-//! - both pads touch the same object ([`PAD_CONTACT`]);
+//! - both pads touch the same object ([`crate::arm::PAD_CONTACT`]);
 //! - the object's centre is within [`GraspLimits::max_centre_offset`] of the pads' mid-plane;
 //! - each pad overlaps the object over at least [`GraspLimits::min_overlap`] of its face;
 //!
@@ -18,7 +18,7 @@
 //! above `2 μ F r` (`r` a quarter of the smaller side of the overlap). A broken weld lets the
 //! object go, and the slip check sees it.
 
-use crate::arm::{SimArm, LINK_FRICTION};
+use crate::arm::{PadReading, SimArm, LINK_FRICTION};
 use crate::convert::to_sim;
 use crate::world::{Owner, SimWorld};
 use akl_planner::hand::Finger;
@@ -28,9 +28,6 @@ use akl_tsr::Pose;
 use rapier3d::parry::query::distance;
 use rapier3d::prelude::{FixedJointBuilder, ImpulseJointHandle, RigidBodyType, SpringCoefficients};
 use serde::Serialize;
-
-/// Largest gap (metres) between a pad and an object for the pad to touch it.
-pub const PAD_CONTACT: f64 = 5e-4;
 
 /// How the weld gives: rapier's soft-constraint model at 60 Hz, critically damped, for the
 /// compliance of rubber pads and fingers. Chosen by measurement over 40 randomized trials of
@@ -60,32 +57,6 @@ impl Default for GraspLimits {
             max_centre_offset: 0.01,
             min_overlap: 0.25,
         }
-    }
-}
-
-/// What one pad touches: the nearest object, how far it is, and how hard the pad pushes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PadReading {
-    /// The nearest object (index), among those within rapier's contact prediction of the pad.
-    pub object: Option<usize>,
-    /// Its distance from the pad, from the exact shapes at their current poses (metres;
-    /// infinite when nothing is near).
-    pub gap: f64,
-    /// Force of the pad's contacts in the last step (N).
-    pub force: f64,
-}
-
-impl PadReading {
-    /// A pad with nothing near it.
-    pub const NOTHING: PadReading = PadReading {
-        object: None,
-        gap: f64::INFINITY,
-        force: 0.0,
-    };
-
-    /// Whether the pad touches its nearest object ([`PAD_CONTACT`]).
-    pub fn touches(&self) -> bool {
-        self.object.is_some() && self.gap <= PAD_CONTACT
     }
 }
 

@@ -19,6 +19,12 @@ pub const OBJECTS: Group = Group::GROUP_2;
 /// simulation (the plan is checked for self-collision, and neighbouring capsules overlap).
 pub const ARM: Group = Group::GROUP_3;
 
+/// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check
+/// with `max_speed`.
+pub fn resting(linear: f64, angular: f64, max_speed: f64) -> bool {
+    linear <= max_speed && angular <= 10.0 * max_speed
+}
+
 /// Simulation settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Physics {

@@ -8,7 +8,7 @@ use k::nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::detector::line_error;
+use crate::line_error::line_error;
 
 /// The calibration file version.
 pub const CALIBRATION_VERSION: u32 = 1;

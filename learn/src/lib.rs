@@ -10,6 +10,7 @@ pub mod demo_error;
 pub mod detector;
 pub mod dialogue;
 pub mod jsonl;
+pub mod line_error;
 pub mod live;
 pub mod mcap_io;
 pub mod measures;

@@ -3,6 +3,7 @@
 
 use crate::report::{Cause, Failure};
 use crate::simulate::observations::Observations;
+use crate::world::resting;
 use akl_scene::{GoalCheck, Task};
 
 /// The goal checks, and a failure for each that does not hold, at the end of settling.
@@ -40,12 +41,6 @@ pub fn rest(speeds: &[(String, f64, f64)], max_speed: f64) -> GoalCheck {
             format!("still moving: {}", moving.join(", "))
         },
     }
-}
-
-/// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check
-/// with `max_speed`.
-pub fn resting(linear: f64, angular: f64, max_speed: f64) -> bool {
-    linear <= max_speed && angular <= 10.0 * max_speed
 }
 
 #[cfg(test)]

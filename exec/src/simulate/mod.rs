@@ -7,9 +7,9 @@
 mod gripper;
 pub mod observations;
 
-use crate::arm::SimArm;
+use crate::arm::{PadReading, SimArm};
 use crate::contacts::{ContactLog, ContactPoint, ContactRoles, StepContext};
-use crate::grasp::{read_pads, PadReading};
+use crate::grasp::read_pads;
 use crate::options::{ExecOptions, Setup};
 use crate::timeline::{Frame, Timeline};
 use crate::world::SimWorld;
@@ -227,7 +227,7 @@ fn all_resting(sim: &SimWorld, rest_speed: f64) -> bool {
         .filter(|&i| sim.objects[i].movable)
         .all(|i| {
             let (v, w) = sim.object_speed(i);
-            crate::checks::goals::resting(v, w, rest_speed)
+            crate::world::resting(v, w, rest_speed)
         })
 }
 
