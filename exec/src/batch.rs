@@ -177,7 +177,7 @@ impl<'a> Batch<'a> {
 
 /// The settings of a batch executing `spec` with `options`, for its report.
 pub fn settings(robot: &Robot, options: &ExecOptions, spec: &TaskSpec) -> Settings {
-    let slack = options.keyframe_slack();
+    let slack = crate::checks::keyframe::KeyframeSlack::of(options);
     Settings {
         version: env!("CARGO_PKG_VERSION").to_string(),
         spec_hash: spec_hash(spec),

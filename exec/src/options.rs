@@ -2,7 +2,6 @@
 //! spec ([`Setup`]).
 
 use crate::arm::Drives;
-use crate::checks::keyframe::KeyframeSlack;
 use crate::contacts::ContactLimits;
 use crate::grasp::GraspLimits;
 use crate::interrupt::Interrupt;
@@ -68,14 +67,6 @@ impl Default for ExecOptions {
             path_rate: 240.0,
             interrupt: Interrupt::NEVER,
         }
-    }
-}
-
-impl ExecOptions {
-    /// The slack of the keyframe check: the simulation's plus four standard deviations of
-    /// the perception error.
-    pub fn keyframe_slack(&self) -> KeyframeSlack {
-        KeyframeSlack::with_perception(self.noise.position, self.noise.yaw)
     }
 }
 

@@ -132,7 +132,11 @@ fn judge(setup: &Setup, obs: &crate::simulate::Observations, report: &mut TrialR
     );
     failures.extend(dropped);
     failures.extend(collision::check(obs.contacts.collisions()));
-    let (keyframes, missed) = keyframe::check(setup.spec, &obs.reaches, &options.keyframe_slack());
+    let (keyframes, missed) = keyframe::check(
+        setup.spec,
+        &obs.reaches,
+        &keyframe::KeyframeSlack::of(options),
+    );
     failures.extend(missed);
     let (lines, strayed) = line::check(&obs.lines, options.line_tolerance);
     failures.extend(strayed);

@@ -13,6 +13,7 @@
 
 pub mod builtin;
 pub mod error;
+pub mod file;
 pub mod goal;
 pub mod intent;
 pub mod layout;
@@ -21,18 +22,21 @@ pub mod overlap;
 pub mod paths;
 pub mod randomize;
 pub mod range;
+pub mod reach;
 pub mod shape;
 pub mod task;
 pub mod world;
 
 pub use error::SceneError;
+pub use file::truth_path_for;
 pub use goal::{Goal, GoalCheck};
 pub use intent::{TeachStep, Teaching};
-pub use layout::{check_layout, Infeasible, Reach};
+pub use layout::{check_layout, Infeasible};
 pub use motion::{FixedRelation, Motion, Mover};
 pub use paths::{ObjectPaths, PathSample};
 pub use randomize::{randomize, randomize_layout, randomize_layout_with, Layout};
 pub use range::{Groups, Range, Ranges};
+pub use reach::Reach;
 pub use shape::Shape;
 pub use task::{Task, TASK_VERSION};
 pub use world::{Object, World};

@@ -266,6 +266,34 @@ fn sample<R: Rng + ?Sized>(rng: &mut R, [lo, hi]: [f64; 2]) -> f64 {
     }
 }
 
+impl Task {
+    /// How randomization moves this task's objects: movers, carriers and ranges.
+    pub fn motion(&self) -> Result<Motion, SceneError> {
+        Motion::of(self)
+    }
+
+    /// The sets of objects that every randomized layout keeps in one fixed relation: the
+    /// members of a rigid group, what stands without a range of its own on something that
+    /// moves (with it), and everything not moved at all (with `world`). A keyframe grounded on
+    /// one member of a set lands where it would grounded on another, so re-grounding between
+    /// them is an equivalent grounding, not an error randomization can reveal. Relations that
+    /// only the execution creates (an object placed relative to another) are not included:
+    /// they depend on the spec. Only sets of two or more names are listed.
+    pub fn fixed_relations(&self) -> Result<Vec<FixedRelation>, SceneError> {
+        Ok(Motion::of(self)?.fixed_relations(&self.world))
+    }
+
+    /// Whether every randomized layout keeps `a` and `b` (object names or `world`) in one
+    /// fixed relation (see [`Task::fixed_relations`]).
+    pub fn held_together(&self, a: &str, b: &str) -> Result<bool, SceneError> {
+        Ok(a == b
+            || self
+                .fixed_relations()?
+                .iter()
+                .any(|r| r.members.iter().any(|m| m == a) && r.members.iter().any(|m| m == b)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

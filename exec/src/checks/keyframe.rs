@@ -9,6 +9,7 @@
 //! grounded on the wrong object misses by the distance that object moved, centimetres under
 //! the task's randomization.
 
+use crate::options::ExecOptions;
 use crate::report::{Cause, Failure, KeyframeCheck};
 use crate::simulate::observations::KeyframeReach;
 use akl_tsr::{Bounds, PoseJson, TaskSpec, Tsr};
@@ -36,6 +37,12 @@ impl KeyframeSlack {
             position: SIMULATION_SLACK.position + 4.0 * position,
             angle: SIMULATION_SLACK.angle + 4.0 * yaw,
         }
+    }
+
+    /// The slack trials run with `options` are judged with: the simulation's plus four
+    /// standard deviations of their perception error.
+    pub fn of(options: &ExecOptions) -> KeyframeSlack {
+        KeyframeSlack::with_perception(options.noise.position, options.noise.yaw)
     }
 }
 
