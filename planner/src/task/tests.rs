@@ -277,28 +277,21 @@ fn randomized_success_rate() {
     }
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
-
-    /// In randomized worlds every plan is collision-free under a dense re-check, keeps its
-    /// lines within 1 mm and stays within the joint, velocity and acceleration limits.
-    #[test]
-    fn randomized_worlds_plan_soundly(task_index in 0..3usize, world_seed in 0..1000u64, seed in 0..1000u64) {
-        let robot = Robot::panda().unwrap();
-        let name = builtin::names()[task_index];
+/// In randomized worlds of every built-in task, every ground truth plans, and every plan is
+/// collision-free under a dense re-check, keeps its lines within 1 mm and stays within the
+/// joint, velocity and acceleration limits (four layouts and planner seeds per task, among them
+/// pick_place layout 602 with seed 0, a failure proptest once found).
+#[test]
+fn randomized_worlds_plan_soundly() {
+    let robot = Robot::panda().unwrap();
+    for name in builtin::names() {
         let task = builtin::task(name).unwrap().unwrap();
-        let world = randomize(&task, world_seed).unwrap();
-        match plan_in(&robot, name, &world, seed) {
-            Ok(plan) => {
-                let violations = recheck(&robot, &world, &plan, &RecheckOptions::default());
-                prop_assert!(violations.is_empty(), "{name}: {}", violations[0]);
-            }
-            // Randomization can put an object where the hand cannot reach around it; any
-            // other failure is the planner's.
-            Err(e) => prop_assert!(
-                matches!(e, PlanError::NoCollisionFreeIk { .. }),
-                "{name} world {world_seed} seed {seed}: {e}"
-            ),
+        for (world_seed, seed) in [(11, 3), (517, 40), (602, 0), (904, 771)] {
+            let world = randomize(&task, world_seed).unwrap();
+            let plan = plan_in(&robot, name, &world, seed)
+                .unwrap_or_else(|e| panic!("{name} world {world_seed} seed {seed}: {e}"));
+            let violations = recheck(&robot, &world, &plan, &RecheckOptions::default());
+            assert!(violations.is_empty(), "{name}: {}", violations[0]);
         }
     }
 }
