@@ -7,7 +7,6 @@ use crate::robot::{PANDA_TOML, PANDA_URDF};
 use crate::rrt::RrtOptions;
 use crate::search::plan_task;
 use akl_scene::{builtin, randomize, Object};
-use proptest::prelude::*;
 use std::path::Path;
 
 #[test]
