@@ -1,7 +1,7 @@
 //! A trial as a trace shows it: the frames of its simulation, the plan and the perceived world.
 
 use crate::contacts::ContactPoint;
-use akl_planner::Plan;
+use akl_planner::{Plan, PlanError};
 use akl_scene::World;
 use akl_tsr::Pose;
 
@@ -34,7 +34,7 @@ pub struct Timeline {
     /// The world the planner perceived.
     pub perceived: Option<World>,
     /// Why planning failed, when it did.
-    pub planning_failure: Option<String>,
+    pub planning_failure: Option<PlanError>,
 }
 
 impl Timeline {

@@ -22,7 +22,7 @@ use crate::report::TrialReport;
 use crate::timeline::{Frame, Timeline};
 use akl_planner::collision::{Checker, RobotCollision, Scene};
 use akl_planner::contact_rules::Step;
-use akl_planner::{Geometry, GripperAction, Robot};
+use akl_planner::{Geometry, GripperAction, PlanError, Robot};
 use akl_scene::{Shape, World};
 use akl_tsr::nalgebra::{Translation3, UnitQuaternion, Vector3};
 use akl_tsr::{Pose, TaskSpec};
@@ -509,12 +509,12 @@ fn contacts(frame: &Frame) -> Value {
 /// keyframe that failed, the arm at rejected IK solutions with what each collides with.
 fn planning_failure(
     input: &TraceInput,
-    failure: &str,
+    failure: &PlanError,
     channels: &Channels,
 ) -> Vec<(f64, u16, Value)> {
     let seen = input.timeline.perceived.as_ref().unwrap_or(input.world);
     let poses = seen.object_poses();
-    let failed = failed_keyframe(failure);
+    let failed = failure.keyframe();
     let mut out = vec![(
         0.0,
         channels.events,
@@ -542,13 +542,6 @@ fn planning_failure(
         out.push((0.0, channels.rejected, rejected(input.robot, seen, kf)));
     }
     out
-}
-
-/// The keyframe a planning error names (`keyframe 3: ...`).
-fn failed_keyframe(failure: &str) -> Option<usize> {
-    let rest = failure.split("keyframe ").nth(1)?;
-    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    digits.parse().ok()
 }
 
 /// The arm at IK solutions of `kf`'s nominal pose in `world`, each with its first collision.

@@ -105,7 +105,7 @@ pub fn run_trial(
         }
         Err(e) => {
             if let Some(tl) = timeline {
-                tl.planning_failure = Some(e.to_string());
+                tl.planning_failure = Some(e.clone());
             }
             report.failures.push(
                 Failure::new(plan_cause(&e), e.to_string())

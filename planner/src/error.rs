@@ -52,6 +52,9 @@ pub enum PlanError {
     /// The spec cannot be grounded in the world (unknown reference object).
     #[error("{0}")]
     Grounding(String),
+    /// No whole-spec candidate was planned (a budget of none).
+    #[error("no candidate was planned")]
+    NoCandidate,
     /// A keyframe asks for something the world does not allow (e.g. grasping furniture).
     #[error("keyframe {keyframe}: {reason}")]
     Invalid {
@@ -114,7 +117,10 @@ impl PlanError {
             | PlanError::NoCollisionFreeIk { keyframe, .. }
             | PlanError::BudgetExhausted { keyframe, .. }
             | PlanError::Line { keyframe, .. } => Some(*keyframe),
-            PlanError::Grounding(_) | PlanError::Start(_) | PlanError::Options(_) => None,
+            PlanError::Grounding(_)
+            | PlanError::NoCandidate
+            | PlanError::Start(_)
+            | PlanError::Options(_) => None,
         }
     }
 }

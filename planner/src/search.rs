@@ -145,7 +145,7 @@ fn first_error(candidates: Vec<CandidateOutcome>) -> PlanError {
     candidates
         .into_iter()
         .find_map(|c| c.result.err())
-        .unwrap_or_else(|| PlanError::Grounding("no candidate was planned".into()))
+        .unwrap_or(PlanError::NoCandidate)
 }
 
 #[cfg(test)]
