@@ -19,22 +19,30 @@ fn robot_info_lists_joints_limits_and_links() {
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(
-        out.contains("panda_joint7") && out.contains("-3.0718") && out.contains("capsule"),
+        out.contains("fer_joint7") && out.contains("-3.0718") && out.contains("hull of"),
         "{out}"
     );
+    assert!(out.contains("stands off them"), "{out}");
     let v = json(&akl(&["robot", "info", "--json"]));
     assert_eq!(v["joints"].as_array().unwrap().len(), 7);
-    assert_eq!(v["tcp_link"], "panda_tcp");
+    assert_eq!(v["tcp_link"], "fer_hand_tcp");
+    // Every meshed link reports how far its model stands off its meshes.
+    for link in v["links"].as_array().unwrap() {
+        if !link["meshes"].as_array().unwrap().is_empty() {
+            let max = link["stand_off"]["max"].as_f64().unwrap();
+            assert!((0.0..0.02).contains(&max), "{link}");
+        }
+    }
 }
 
 #[test]
 fn fk_of_the_ready_pose_is_the_published_reference() {
     let o = akl(&["robot", "fk", "--joints", READY]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
     assert!(
-        stdout(&o).contains("flange  [0.307, -0.000, 0.590]"),
-        "{}",
-        stdout(&o)
+        out.contains("flange  [0.307, ") && out.contains("0.000, 0.590]"),
+        "{out}"
     );
     let v = json(&akl(&["robot", "fk", "--joints", READY, "--json"]));
     let p = v["flange"]["p"].as_array().unwrap();
@@ -130,12 +138,29 @@ fn another_robot_folder_is_loaded_at_run_time() {
     std::fs::write(
         dir.join("robot.toml"),
         toml.replace("name = \"panda\"", "name = \"numerical_panda\"")
-            .replace("solver = \"panda\"", "solver = \"dls\""),
+            .replace("solver = \"panda\"", "solver = \"dls\"")
+            .replace("franka_description = \".\"", ""),
     )
     .unwrap();
-    std::fs::copy(format!("{panda}/panda.urdf"), dir.join("panda.urdf")).unwrap();
+    std::fs::copy(format!("{panda}/fer.urdf"), dir.join("fer.urdf")).unwrap();
     let dir_arg = dir.to_str().unwrap();
+    // The meshes are not in the copy: the package must be found elsewhere.
     let o = akl(&["robot", "info", "--robot", dir_arg]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("fer_link0") && stderr(&o).contains("--package-path"),
+        "{}",
+        stderr(&o)
+    );
+    let package = format!("franka_description={panda}");
+    let o = akl(&[
+        "robot",
+        "info",
+        "--robot",
+        dir_arg,
+        "--package-path",
+        &package,
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("numerical_panda") && stdout(&o).contains("dls"));
     let o = akl(&[
@@ -145,6 +170,8 @@ fn another_robot_folder_is_loaded_at_run_time() {
         "0.45,0.25,0.2,1,0,0,0",
         "--robot",
         dir_arg,
+        "--package-path",
+        &package,
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::remove_dir_all(&dir).unwrap();

@@ -23,7 +23,7 @@ use crate::convert::{link_collider, to_sim};
 use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
 use akl_planner::fk::{Drive, Motion};
 use akl_planner::hand::{HandModel, LocalBox};
-use akl_planner::{Geometry, Robot};
+use akl_planner::{Geometry, Robot, ShapeRole};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;
 use rapier3d::pipeline::ActiveHooks;
@@ -282,20 +282,25 @@ impl SimArm {
         arm.compute(robot);
         for (i, link) in robot.links().iter().enumerate() {
             let shapes: Vec<(Geometry, Pose)> = if let Some(finger) = arm.hand.finger(i) {
-                // The pad, and the finger's other elements as the URDF gives them.
+                // The pad, and the finger's other primitives as the URDF gives them (the
+                // capsules around its visual mesh are the planner's).
                 let others = link
                     .shapes
                     .iter()
+                    .filter(|s| s.role == ShapeRole::Exact)
                     .enumerate()
                     .filter(|(k, _)| *k != finger.pad_element)
-                    .map(|(_, s)| (s.geometry, s.origin));
+                    .map(|(_, s)| (s.geometry.clone(), s.origin));
                 std::iter::once(finger.pad.geometry())
                     .chain(others)
                     .collect()
             } else if i == arm.hand.palm_link {
                 arm.hand.palm.iter().map(LocalBox::geometry).collect()
             } else {
-                link.shapes.iter().map(|s| (s.geometry, s.origin)).collect()
+                link.shapes
+                    .iter()
+                    .map(|s| (s.geometry.clone(), s.origin))
+                    .collect()
             };
             if shapes.is_empty() {
                 arm.bodies.push(None);

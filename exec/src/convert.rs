@@ -169,6 +169,19 @@ pub fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuilder {
                 .position(to_sim(&(origin * cylinder_axis())))
         }
         Geometry::Sphere { radius } => object_collider(&Shape::Sphere { radius }, origin),
+        // The hull's own faces; should rapier refuse them, the capsule that holds the hull.
+        Geometry::RoundHull(ref hull) => {
+            let points: Vec<Vector> = hull
+                .vertices
+                .iter()
+                .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+                .collect();
+            ColliderBuilder::round_convex_mesh(points, &hull.triangles, hull.border as f32)
+                .unwrap_or_else(|| {
+                    ColliderBuilder::capsule_z(hull.half_length as f32, hull.radius as f32)
+                })
+                .position(to_sim(origin))
+        }
     }
 }
 

@@ -17,6 +17,7 @@ pub mod simulate;
 pub mod timeline;
 pub mod trace;
 pub mod trial;
+pub mod visual;
 pub mod world;
 
 pub use options::{ExecOptions, Setup};

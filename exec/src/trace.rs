@@ -38,7 +38,7 @@ fn nanos(t: f64) -> u64 {
     (t.max(0.0) * 1e9).round() as u64
 }
 
-fn stamp(t: f64) -> Value {
+pub(crate) fn stamp(t: f64) -> Value {
     let ns = nanos(t);
     json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
 }
@@ -47,13 +47,13 @@ fn vec3(v: &Vector3<f64>) -> Value {
     json!({"x": v.x, "y": v.y, "z": v.z})
 }
 
-fn pose(p: &Pose) -> Value {
+pub(crate) fn pose(p: &Pose) -> Value {
     let q = p.rotation.quaternion().coords;
     json!({"position": vec3(&p.translation.vector),
            "orientation": {"x": q.x, "y": q.y, "z": q.z, "w": q.w}})
 }
 
-fn color(rgba: [f64; 4]) -> Value {
+pub(crate) fn color(rgba: [f64; 4]) -> Value {
     json!({"r": rgba[0], "g": rgba[1], "b": rgba[2], "a": rgba[3]})
 }
 
@@ -78,6 +78,7 @@ struct Primitives {
     arrows: Vec<Value>,
     lines: Vec<Value>,
     texts: Vec<Value>,
+    triangles: Vec<Value>,
 }
 
 impl Primitives {
@@ -128,6 +129,17 @@ impl Primitives {
             Geometry::Box { size } => self.cube(at, Vector3::from(size), rgba),
             Geometry::Cylinder { radius, length } => self.cylinder(at, radius, length, rgba),
             Geometry::Sphere { radius } => self.sphere(at, radius, rgba),
+            // A grown hull is drawn as its hull.
+            Geometry::RoundHull(ref hull) => {
+                let points: Vec<Value> = hull
+                    .triangles
+                    .iter()
+                    .flat_map(|t| t.map(|i| vec3(&hull.vertices[i as usize].coords)))
+                    .collect();
+                self.triangles
+                    .push(json!({"pose": pose(at), "points": points,
+                    "color": color(rgba), "colors": [], "indices": []}));
+            }
         }
     }
 
@@ -175,12 +187,12 @@ impl Primitives {
         json!({"timestamp": stamp(t), "frame_id": frame, "id": id,
                "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": locked, "metadata": [],
                "arrows": self.arrows, "cubes": self.cubes, "spheres": self.spheres,
-               "cylinders": self.cylinders, "lines": self.lines, "triangles": [],
+               "cylinders": self.cylinders, "lines": self.lines, "triangles": self.triangles,
                "texts": self.texts, "models": []})
     }
 }
 
-fn scene_update(entities: Vec<Value>) -> Value {
+pub(crate) fn scene_update(entities: Vec<Value>) -> Value {
     json!({"deletions": [], "entities": entities})
 }
 
@@ -313,6 +325,7 @@ fn mcap_error(path: &Path) -> impl Fn(mcap::McapError) -> ExecError + '_ {
 struct Channels {
     tf: u16,
     robot: u16,
+    visual: u16,
     objects: u16,
     perceived: u16,
     keyframes: u16,
@@ -364,6 +377,7 @@ fn trace_bytes(path: &Path, input: &TraceInput) -> Result<Vec<u8>, ExecError> {
     let channels = Channels {
         tf: channel(tf_schema, "/tf").map_err(&err)?,
         robot: channel(scene_schema, "/robot").map_err(&err)?,
+        visual: channel(scene_schema, "/robot/visual").map_err(&err)?,
         objects: channel(scene_schema, "/objects").map_err(&err)?,
         perceived: channel(scene_schema, "/perceived").map_err(&err)?,
         keyframes: channel(scene_schema, "/keyframes").map_err(&err)?,
@@ -389,6 +403,9 @@ fn trace_bytes(path: &Path, input: &TraceInput) -> Result<Vec<u8>, ExecError> {
         .map_err(&err)?;
     let mut messages: Vec<(f64, u16, Value)> = Vec::new();
     messages.push((0.0, channels.robot, robot_shapes(input.robot)));
+    if let Some(models) = crate::visual::robot_models(input.robot) {
+        messages.push((0.0, channels.visual, models));
+    }
     let world_poses: Vec<Pose> = input.world.objects.iter().map(|o| o.pose).collect();
     messages.push((
         0.0,

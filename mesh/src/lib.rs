@@ -8,12 +8,16 @@
 //! - [`ConvexHull`]: the convex hull of a set of points, centred on the middle of its bounding
 //!   box, with its volume and centre of mass (a uniform solid), as planning and simulation use
 //!   it.
+//! - [`enclosing_capsules`]: a few [`Capsule`]s whose union holds every triangle of a mesh, as
+//!   tight as the search finds: the collision model a planner gives a robot link.
 
+mod enclose;
 mod hull;
 mod read;
 
+pub use enclose::{enclosing_capsules, Capsule};
 pub use hull::ConvexHull;
-pub use read::{load, TriMesh};
+pub use read::{load, load_bytes, TriMesh};
 
 use std::path::PathBuf;
 use thiserror::Error;

@@ -17,13 +17,23 @@ pub struct TriMesh {
 /// The triangles of the STL, OBJ or COLLADA file at `path`, every mesh in it merged into one.
 /// Errors name the file.
 pub fn load(path: &Path) -> Result<TriMesh, MeshError> {
+    let bytes = std::fs::read(path).map_err(|e| MeshError::Read {
+        path: path.to_path_buf(),
+        problem: e.to_string(),
+    })?;
+    load_bytes(&bytes, path)
+}
+
+/// The triangles of a mesh file's contents (`bytes`), its format told by the extension of
+/// `path`, which also names it in errors: for meshes built into the binary.
+pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
     let read_error = |problem: String| MeshError::Read {
         path: path.to_path_buf(),
         problem,
     };
     let scene = mesh_loader::Loader::default()
         .merge_meshes(true)
-        .load(path)
+        .load_from_slice(bytes, path)
         .map_err(|e| read_error(e.to_string()))?;
     let mut mesh = TriMesh {
         vertices: Vec::new(),
@@ -49,7 +59,25 @@ pub fn load(path: &Path) -> Result<TriMesh, MeshError> {
     {
         return Err(read_error(format!("vertex {bad} is not finite")));
     }
+    if let Some(bad) = mesh
+        .triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i as usize >= mesh.vertices.len()))
+    {
+        return Err(read_error(format!(
+            "triangle {bad} names a vertex it does not have"
+        )));
+    }
     Ok(mesh)
+}
+
+impl TriMesh {
+    /// Each triangle as its three corners.
+    pub fn corners(&self) -> impl Iterator<Item = [Point3<f64>; 3]> + '_ {
+        self.triangles
+            .iter()
+            .map(|t| t.map(|i| self.vertices[i as usize]))
+    }
 }
 
 #[cfg(test)]

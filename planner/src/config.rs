@@ -26,6 +26,10 @@ pub struct RobotConfig {
     pub gripper: GripperConfig,
     /// Collision margins and exclusions.
     pub collision: CollisionConfig,
+    /// ROS packages the URDF's `package://` meshes name, each with its folder relative to
+    /// the robot folder (e.g. `franka_description = "."`).
+    #[serde(default)]
+    pub packages: std::collections::BTreeMap<String, String>,
 }
 
 /// The `[ik]` table.

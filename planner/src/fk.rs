@@ -2,7 +2,7 @@
 //! link poses cost a few hundred nanoseconds and no allocation (the planner evaluates them
 //! millions of times). Tests check it against k's own forward kinematics.
 
-use crate::geometry::{Geometry, LinkShape};
+use crate::geometry::{Geometry, LinkShape, ShapeRole};
 use akl_tsr::nalgebra::{Matrix6xX, Translation3, Unit, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
 use std::collections::BTreeMap;
@@ -214,10 +214,13 @@ impl Kinematics {
                     for c in &link.collisions {
                         let geometry = Geometry::from_k(&c.geometry)
                             .map_err(|e| format!("link `{}`: {e}", link.name))?;
-                        shapes.push(LinkShape {
-                            geometry,
-                            origin: *c.origin(),
-                        });
+                        if let Some(geometry) = geometry {
+                            shapes.push(LinkShape {
+                                geometry,
+                                origin: *c.origin(),
+                                role: ShapeRole::Exact,
+                            });
+                        }
                     }
                     (link.name.clone(), shapes)
                 }
@@ -268,6 +271,11 @@ impl Kinematics {
     /// Index of the link named `name`.
     pub fn link_index(&self, name: &str) -> Option<usize> {
         self.links.iter().position(|l| l.name == name)
+    }
+
+    /// Adds collision shapes to link `link` (the capsules enclosing its meshes).
+    pub(crate) fn add_shapes(&mut self, link: usize, shapes: impl IntoIterator<Item = LinkShape>) {
+        self.links[link].shapes.extend(shapes);
     }
 
     /// Indices of the links moved by each arm joint (the joint's child link), in arm order.
@@ -412,7 +420,7 @@ mod tests {
     #[test]
     fn k_reproduces_the_published_reference_pose() {
         let robot = Robot::panda().unwrap();
-        let flange = k_link_pose(&robot, &REFERENCE_Q, 0.08, "panda_link8");
+        let flange = k_link_pose(&robot, &REFERENCE_Q, 0.08, "fer_link8");
         let expected = Vector3::new(0.30689, 0.0, 0.59028);
         assert!(
             (flange.translation.vector - expected).norm() < 1e-5,
@@ -481,9 +489,9 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let poses = robot.link_poses(&REFERENCE_Q, 0.06);
         let index = |n: &str| robot.links().iter().position(|l| l.name == n).unwrap();
-        let hand = poses[index("panda_hand")];
-        let left = hand.inverse() * poses[index("panda_leftfinger")];
-        let right = hand.inverse() * poses[index("panda_rightfinger")];
+        let hand = poses[index("fer_hand")];
+        let left = hand.inverse() * poses[index("fer_leftfinger")];
+        let right = hand.inverse() * poses[index("fer_rightfinger")];
         assert!((left.translation.y - 0.03).abs() < 1e-12);
         assert!((right.translation.y + 0.03).abs() < 1e-12);
     }

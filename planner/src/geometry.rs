@@ -1,11 +1,13 @@
 //! Collision geometry of robot links, read from the URDF's collision elements.
 
+use akl_tsr::nalgebra::Point3;
 use akl_tsr::Pose;
 use serde::Serialize;
+use std::sync::Arc;
 
-/// A primitive collision shape in its own frame, URDF conventions: capsules and cylinders run
-/// along z and are centred on the frame origin.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// A collision shape in its own frame, URDF conventions: capsules and cylinders run along z
+/// and are centred on the frame origin.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Geometry {
     /// A capsule: `length` between the centres of its two end spheres of `radius`.
@@ -32,21 +34,67 @@ pub enum Geometry {
         /// Radius (metres).
         radius: f64,
     },
+    /// A convex hull grown by a border: what encloses a link's meshes ([`crate::enclosure`]).
+    RoundHull(#[serde(serialize_with = "hull_summary")] Arc<RoundHull>),
+}
+
+/// A grown hull as `robot info --json` shows it: its size, not its vertices.
+fn hull_summary<S: serde::Serializer>(hull: &Arc<RoundHull>, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut out = s.serialize_struct("RoundHull", 4)?;
+    out.serialize_field("vertices", &hull.vertices.len())?;
+    out.serialize_field("border", &hull.border)?;
+    out.serialize_field("capsule_half_length", &hull.half_length)?;
+    out.serialize_field("capsule_radius", &hull.radius)?;
+    out.end()
+}
+
+/// A convex polytope grown by `border` in every direction (its Minkowski sum with a ball),
+/// with the capsule along z that holds it, for culling.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RoundHull {
+    /// The hull's vertices (metres, in the shape's frame).
+    pub vertices: Vec<Point3<f64>>,
+    /// Its faces, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// How far the shape reaches beyond the hull (metres).
+    pub border: f64,
+    /// Half the length of the holding capsule's segment, centred on the origin along z.
+    pub half_length: f64,
+    /// The holding capsule's radius: every point of the grown hull is within it of the
+    /// segment.
+    pub radius: f64,
 }
 
 /// One collision element of a link: a shape and where it sits in the link frame.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LinkShape {
     /// The shape.
     pub geometry: Geometry,
     /// Pose of the shape's frame in the link frame.
     #[serde(with = "akl_tsr::pose::serde_pose")]
     pub origin: Pose,
+    /// Whether the URDF gives the shape as it is or it encloses the link's meshes.
+    pub role: ShapeRole,
+}
+
+/// Where a link's collision shape comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeRole {
+    /// A URDF primitive (box, capsule, cylinder, sphere), simulated as it is: the fingers'
+    /// pads and boxes grasp with these.
+    Exact,
+    /// A hull grown to hold the link's collision and visual meshes ([`crate::enclosure`]):
+    /// the planner and the simulation's contact verdicts use it so that whatever touches the
+    /// real link touches the model.
+    Enclosure,
 }
 
 impl Geometry {
-    /// Converts a k collision geometry; meshes and non-positive sizes are rejected.
-    pub fn from_k(geometry: &k::link::Geometry<f64>) -> Result<Self, String> {
+    /// Converts a k collision geometry; `None` for a mesh (enclosed by capsules instead, see
+    /// [`crate::enclosure`]); non-positive sizes are rejected.
+    pub fn from_k(geometry: &k::link::Geometry<f64>) -> Result<Option<Self>, String> {
         let g = match geometry {
             k::link::Geometry::Capsule { radius, length } => Geometry::Capsule {
                 radius: *radius,
@@ -64,25 +112,22 @@ impl Geometry {
                 length: *length,
             },
             k::link::Geometry::Sphere { radius } => Geometry::Sphere { radius: *radius },
-            k::link::Geometry::Mesh { filename, .. } => {
-                return Err(format!(
-                    "mesh collision geometry ({filename}) is not supported; use capsules, boxes, cylinders or spheres"
-                ))
-            }
+            k::link::Geometry::Mesh { .. } => return Ok(None),
         };
         let positive = |v: f64| v.is_finite() && v > 0.0;
-        let valid = match g {
+        let valid = match &g {
             Geometry::Capsule { radius, length } => {
-                positive(radius) && length.is_finite() && length >= 0.0
+                positive(*radius) && length.is_finite() && *length >= 0.0
             }
             Geometry::Box { size } => size.iter().all(|v| positive(*v)),
-            Geometry::Cylinder { radius, length } => positive(radius) && positive(length),
-            Geometry::Sphere { radius } => positive(radius),
+            Geometry::Cylinder { radius, length } => positive(*radius) && positive(*length),
+            Geometry::Sphere { radius } => positive(*radius),
+            Geometry::RoundHull(_) => true,
         };
         if !valid {
             return Err(format!("collision geometry {g:?} has a non-positive size"));
         }
-        Ok(g)
+        Ok(Some(g))
     }
 
     /// Radius of the smallest sphere about the shape's origin that contains it.
@@ -92,6 +137,7 @@ impl Geometry {
             Geometry::Box { size } => 0.5 * (size[0].hypot(size[1])).hypot(size[2]),
             Geometry::Cylinder { radius, length } => radius.hypot(0.5 * length),
             Geometry::Sphere { radius } => radius,
+            Geometry::RoundHull(ref h) => h.half_length + h.radius,
         }
     }
 }

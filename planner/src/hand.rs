@@ -11,12 +11,14 @@
 //!   along the finger, its inner face on the finger's inner side); the finger's other
 //!   elements (the Panda's screw mount, carriage sledge and diagonal finger) are simulated as
 //!   they are;
-//! - the palm is the bounding box of the hand link's URDF shapes, cut at the plane where the
-//!   finger joints sit (for the Panda, 58.4 mm below the flange).
+//! - the palm is the bounding box of the hand link's URDF primitives (of its collision meshes
+//!   when it has none, as Franka's hand), cut at the plane where the finger joints sit (for
+//!   the Panda, 58.4 mm below the flange).
 
 use crate::fk::Motion;
+use crate::meshes::MeshRole;
 use crate::parry_convert::{pose, robot_shape};
-use crate::{Geometry, Robot};
+use crate::{Geometry, Robot, ShapeRole};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 
@@ -59,6 +61,21 @@ fn bounds(shapes: &[(Geometry, Pose)]) -> Option<(Vector3<f64>, Vector3<f64>)> {
             lo[k] = lo[k].min(f64::from(aabb.mins[k]));
             hi[k] = hi[k].max(f64::from(aabb.maxs[k]));
         }
+    }
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
+/// The bounds, in the link frame, of a link's collision meshes.
+fn mesh_bounds(robot: &Robot, link: usize) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    let meshes = robot
+        .meshes()
+        .iter()
+        .filter(|m| m.link == link && m.role == MeshRole::Collision);
+    for v in meshes.flat_map(|m| &m.mesh.vertices) {
+        lo = lo.inf(&v.coords);
+        hi = hi.sup(&v.coords);
     }
     (lo.x <= hi.x).then_some((lo, hi))
 }
@@ -109,11 +126,13 @@ impl HandModel {
         if links[b].parent != Some(palm_link) {
             return None;
         }
+        // The URDF's own primitives: capsules that enclose meshes reach past the real link.
         let shapes = |i: usize| -> Vec<(Geometry, Pose)> {
             links[i]
                 .shapes
                 .iter()
-                .map(|s| (s.geometry, s.origin))
+                .filter(|s| s.role == ShapeRole::Exact)
+                .map(|s| (s.geometry.clone(), s.origin))
                 .collect()
         };
         // The fingers at full opening, in the palm's frame: the closing axis, and which way
@@ -167,7 +186,8 @@ impl HandModel {
         let mount = links[a].origin.translation.vector;
         let out = mount.iamax();
         let sign = mount[out].signum();
-        let palm = bounds(&shapes(palm_link)).and_then(|(mut lo, mut hi)| {
+        let palm_bounds = bounds(&shapes(palm_link)).or_else(|| mesh_bounds(robot, palm_link));
+        let palm = palm_bounds.and_then(|(mut lo, mut hi)| {
             if sign > 0.0 {
                 hi[out] = hi[out].min(mount[out]);
             } else {
@@ -223,8 +243,15 @@ mod tests {
             // The inner face lies on the finger joint's axis line (the URDF finger's inner side).
             assert!(f.face_centre().y.abs() < 1e-4, "{:?}", f.face_centre());
         }
-        assert!(hand.fingers[0].inward.dot(&Vector3::y()) < -0.99);
-        assert!(hand.fingers[1].inward.dot(&Vector3::y()) > 0.99);
+        // Each finger's frame has its inner side towards -y (the FER turns the right finger
+        // half a turn about z); in the palm's frame the two face each other.
+        let poses = robot.link_poses(robot.ready(), robot.open_width());
+        let in_palm =
+            |f: &Finger| (poses[hand.palm_link].inverse() * poses[f.link]).rotation * f.inward;
+        for f in &hand.fingers {
+            assert!(f.inward.dot(&Vector3::y()) < -0.99, "{f:?}");
+        }
+        assert!(in_palm(&hand.fingers[0]).dot(&in_palm(&hand.fingers[1])) < -0.99);
         let palm = hand.palm.unwrap();
         assert!(
             (palm.centre.z + palm.half.z - 0.0584).abs() < 1e-5,

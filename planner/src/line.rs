@@ -135,7 +135,6 @@ fn plan_line_turning(
     options: &LineOptions,
     turn_by: f64,
 ) -> Result<Vec<Vec<f64>>, LineFailure> {
-    let robot = space.checker.robot();
     let distance = (to.translation.vector - from.translation.vector).norm();
     let angle = from.rotation.angle_to(&to.rotation);
     let steps = (distance / options.position_step)
@@ -143,25 +142,91 @@ fn plan_line_turning(
         .ceil()
         .max(1.0) as usize;
     let base_inv = base.inverse();
+    let line = Line {
+        from,
+        to,
+        base,
+        base_inv,
+        turn_by,
+        options,
+    };
     let mut path = vec![start.to_vec()];
     for k in 1..=steps {
-        let s = k as f64 / steps as f64;
-        let pose = interpolate_turning(from, to, s, turn_by).ok_or(LineFailure::HalfTurn)?;
-        let target = base_inv * pose;
-        let previous = &path[path.len() - 1];
-        let q = match robot.ik_continuous(&target, previous, options.max_joint_step) {
+        let (s0, s) = ((k - 1) as f64 / steps as f64, k as f64 / steps as f64);
+        let previous = path[path.len() - 1].clone();
+        line.extend(space, &mut path, &previous, s0, s, MAX_BISECTIONS)?;
+    }
+    Ok(path)
+}
+
+/// How many times a step of a line is halved, at most, to keep the arm's joint-space motion
+/// between waypoints within the line's tolerance.
+const MAX_BISECTIONS: u32 = 6;
+
+/// A line being planned: its ends and settings.
+struct Line<'a> {
+    from: &'a Pose,
+    to: &'a Pose,
+    base: &'a Pose,
+    base_inv: Pose,
+    turn_by: f64,
+    options: &'a LineOptions,
+}
+
+impl Line<'_> {
+    /// Appends to `path` the waypoints that move the TCP from the line's fraction `s0` (where
+    /// `previous` puts it) to `s`: one, or, when the joint-space motion between them strays
+    /// from the line by more than the tolerance, those of the step's two halves.
+    fn extend(
+        &self,
+        space: &Space,
+        path: &mut Vec<Vec<f64>>,
+        previous: &[f64],
+        s0: f64,
+        s: f64,
+        bisections: u32,
+    ) -> Result<(), LineFailure> {
+        let robot = space.checker.robot();
+        let pose = interpolate_turning(self.from, self.to, s, self.turn_by)
+            .ok_or(LineFailure::HalfTurn)?;
+        let target = self.base_inv * pose;
+        let q = match robot.ik_continuous(&target, previous, self.options.max_joint_step) {
             Some(q) => q,
             None if robot.ik(&target, previous).is_err() => {
                 return Err(LineFailure::LeavesWorkspace { at: s })
             }
             None => return Err(LineFailure::JointJump { at: s }),
         };
+        if self.strays(space, previous, &q) {
+            if bisections == 0 {
+                return Err(LineFailure::JointJump { at: s });
+            }
+            let mid = 0.5 * (s0 + s);
+            self.extend(space, path, previous, s0, mid, bisections - 1)?;
+            let halfway = path[path.len() - 1].clone();
+            return self.extend(space, path, &halfway, mid, s, bisections - 1);
+        }
         if let Some(hit) = space.edge(previous, &q) {
             return Err(LineFailure::Collision { at: s, hit });
         }
         path.push(q);
+        Ok(())
     }
-    Ok(path)
+
+    /// Whether the TCP leaves the line by more than the tolerance anywhere on the joint-space
+    /// segment from `a` to `b` (checked at its quarter points).
+    fn strays(&self, space: &Space, a: &[f64], b: &[f64]) -> bool {
+        let robot = space.checker.robot();
+        let (p, q) = (self.from.translation.vector, self.to.translation.vector);
+        let mut between = vec![0.0; a.len()];
+        [0.25, 0.5, 0.75].iter().any(|&t| {
+            for (m, (x, y)) in between.iter_mut().zip(a.iter().zip(b)) {
+                *m = x + t * (y - x);
+            }
+            let at = (self.base * robot.tcp_pose(&between)).translation.vector;
+            distance_to_segment(&at, &p, &q) > self.options.tolerance
+        })
+    }
 }
 
 /// The pose a fraction `s` of the way from `a` to `b` (position lerp, orientation slerp), with

@@ -32,6 +32,21 @@ pub fn cylinder_axis() -> Pose {
 pub fn robot_shape(geometry: &Geometry, inflate: f64) -> (SharedShape, Pose) {
     let m = inflate as f32;
     match *geometry {
+        Geometry::RoundHull(ref hull) => {
+            let points: Vec<parry3d::math::Vector> = hull
+                .vertices
+                .iter()
+                .map(|v| parry3d::math::Vector::new(v.x as f32, v.y as f32, v.z as f32))
+                .collect();
+            let border = (hull.border + inflate) as f32;
+            // The hull's own faces (no hull is recomputed); should parry refuse them, the
+            // capsule that holds the hull, which holds everything the hull does.
+            let shape = SharedShape::round_convex_mesh(points, &hull.triangles, border)
+                .unwrap_or_else(|| {
+                    SharedShape::capsule_z(hull.half_length as f32, (hull.radius + inflate) as f32)
+                });
+            (shape, Pose::identity())
+        }
         Geometry::Capsule { radius, length } => (
             SharedShape::capsule_z(0.5 * length as f32, radius as f32 + m),
             Pose::identity(),

@@ -2,23 +2,83 @@
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
 use crate::config::{IkSolverKind, RobotConfig};
+use crate::enclosure;
 use crate::error::{IkError, RobotError};
 use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
+use crate::geometry::LinkShape;
 use crate::ik::{DlsIk, IkSolver, PandaIk};
+use crate::meshes::{read_link_meshes, EmbeddedFiles, LinkMesh, MeshFiles, PackagePath};
 use crate::urdf_load;
 use akl_tsr::Pose;
 use std::path::Path;
+use std::sync::{Arc, OnceLock};
 
-/// Most links a robot may have (link poses live on the stack during a check).
-pub const MAX_LINKS: usize = 32;
-
-/// Most collision elements a robot may have (they are placed on the stack during a check).
-pub const MAX_BODIES: usize = 40;
+/// One embedded mesh of the Panda: its path in `robots/panda` and its bytes.
+macro_rules! panda_mesh {
+    ($path:literal) => {
+        ($path, include_bytes!(concat!("../../robots/panda/", $path)))
+    };
+}
 
 /// The Panda's `robot.toml`, embedded so the binary works from any directory.
 pub const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");
-/// The Panda's URDF, embedded.
-pub const PANDA_URDF: &str = include_str!("../../robots/panda/panda.urdf");
+/// The Panda's URDF (franka_description's `fer.urdf`), embedded.
+pub const PANDA_URDF: &str = include_str!("../../robots/panda/fer.urdf");
+
+/// The Panda's meshes, embedded, by their path in `robots/panda`.
+const PANDA_MESHES: EmbeddedFiles = &[
+    panda_mesh!("meshes/robot_arms/fer/collision/link0.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link1.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link2.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link3.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link4.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link5.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link6.stl"),
+    panda_mesh!("meshes/robot_arms/fer/collision/link7.stl"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link0.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link1.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link2.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link3.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link4.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link5.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link6.dae"),
+    panda_mesh!("meshes/robot_arms/fer/visual/link7.dae"),
+    panda_mesh!("meshes/robot_ee/franka_hand_white/collision/hand.stl"),
+    panda_mesh!("meshes/robot_ee/franka_hand_white/visual/hand.dae"),
+    panda_mesh!("meshes/robot_ee/franka_hand_white/visual/finger.dae"),
+];
+
+/// The built-in Panda's meshes and the capsules enclosing them, made once per process (reading
+/// and fitting them takes a tenth of a second; tests build the Panda hundreds of times).
+static PANDA_GEOMETRY: OnceLock<Result<LinkGeometry, String>> = OnceLock::new();
+
+/// A robot's meshes and, per link, the capsules that enclose them.
+#[derive(Debug, Clone)]
+struct LinkGeometry {
+    meshes: Arc<[LinkMesh]>,
+    enclosures: Vec<(usize, Option<LinkShape>)>,
+}
+
+impl LinkGeometry {
+    /// Reads the URDF's meshes and fits each meshed link's capsules.
+    fn read(urdf: &urdf_rs::Robot, kin: &Kinematics, files: &MeshFiles) -> Result<Self, String> {
+        let meshes = read_link_meshes(urdf, kin, files)?;
+        let mut links: Vec<usize> = meshes.iter().map(|m| m.link).collect();
+        links.sort_unstable();
+        links.dedup();
+        let enclosures = links
+            .into_iter()
+            .map(|link| {
+                let own: Vec<&LinkMesh> = meshes.iter().filter(|m| m.link == link).collect();
+                (link, enclosure::enclose(&own))
+            })
+            .collect();
+        Ok(LinkGeometry {
+            meshes: meshes.into(),
+            enclosures,
+        })
+    }
+}
 
 /// Distinct-solution spacing used by [`Robot::ik_solutions`] callers by default (radians).
 pub const SOLUTION_SPACING: f64 = 0.1;
@@ -38,21 +98,35 @@ pub struct Robot {
     hand_links: Vec<usize>,
     mount_links: Vec<usize>,
     allowed_pairs: Vec<(usize, usize)>,
+    meshes: Arc<[LinkMesh]>,
 }
 
 impl Robot {
     /// The built-in Franka Emika Panda (`robots/panda`).
     pub fn panda() -> Result<Robot, RobotError> {
-        Robot::from_texts(
-            PANDA_TOML,
+        Robot::panda_with(PANDA_TOML)
+    }
+
+    /// The built-in Panda with another `robot.toml` (e.g. another IK solver or margins).
+    pub fn panda_with(toml_text: &str) -> Result<Robot, RobotError> {
+        Robot::build(
+            toml_text,
             Path::new("robots/panda/robot.toml"),
             PANDA_URDF,
-            Path::new("robots/panda/panda.urdf"),
+            Path::new("robots/panda/fer.urdf"),
+            &[],
+            Some(PANDA_MESHES),
         )
     }
 
     /// Loads the robot folder `dir`: its `robot.toml` and the URDF that names.
     pub fn load(dir: &Path) -> Result<Robot, RobotError> {
+        Robot::load_with(dir, &[])
+    }
+
+    /// Loads the robot folder `dir`, finding the URDF's `package://` meshes in `packages`
+    /// first (then in the folder's `[packages]` and `ROS_PACKAGE_PATH`).
+    pub fn load_with(dir: &Path, packages: &[PackagePath]) -> Result<Robot, RobotError> {
         let toml_path = dir.join("robot.toml");
         let read = |path: &Path| {
             std::fs::read_to_string(path).map_err(|source| RobotError::Io {
@@ -67,15 +141,29 @@ impl Robot {
         })?;
         let urdf_path = dir.join(&config.urdf);
         let urdf_text = read(&urdf_path)?;
-        Robot::from_texts(&toml_text, &toml_path, &urdf_text, &urdf_path)
+        Robot::build(
+            &toml_text, &toml_path, &urdf_text, &urdf_path, packages, None,
+        )
     }
 
-    /// Builds a robot from the texts of its `robot.toml` and URDF; the paths name them in errors.
+    /// Builds a robot from the texts of its `robot.toml` and URDF; the paths name them in
+    /// errors and locate the URDF's meshes on disk.
     pub fn from_texts(
         toml_text: &str,
         toml_path: &Path,
         urdf_text: &str,
         urdf_path: &Path,
+    ) -> Result<Robot, RobotError> {
+        Robot::build(toml_text, toml_path, urdf_text, urdf_path, &[], None)
+    }
+
+    fn build(
+        toml_text: &str,
+        toml_path: &Path,
+        urdf_text: &str,
+        urdf_path: &Path,
+        packages: &[PackagePath],
+        embedded: Option<EmbeddedFiles>,
     ) -> Result<Robot, RobotError> {
         let config_err = |message: String| RobotError::Config {
             path: toml_path.to_path_buf(),
@@ -105,15 +193,30 @@ impl Robot {
                 })
             })
             .collect();
-        let (kin, arm) =
+        let (mut kin, arm) =
             Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &mimics)
                 .map_err(urdf_err)?;
-        let shapes: usize = kin.links().iter().map(|l| l.shapes.len()).sum();
-        if kin.links().len() > MAX_LINKS || shapes > MAX_BODIES {
-            return Err(urdf_err(format!(
-                "{} links with {shapes} collision elements: the planner handles at most {MAX_LINKS} links and {MAX_BODIES} elements",
-                kin.links().len()
-            )));
+        let robot_dir = toml_path.parent().unwrap_or(Path::new(""));
+        let files = MeshFiles::new(
+            robot_dir,
+            urdf_path.parent().unwrap_or(Path::new("")),
+            packages,
+            &config
+                .packages
+                .iter()
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect::<Vec<_>>(),
+            embedded,
+        );
+        let geometry = match embedded {
+            Some(_) => PANDA_GEOMETRY
+                .get_or_init(|| LinkGeometry::read(&urdf, &kin, &files))
+                .clone(),
+            None => LinkGeometry::read(&urdf, &kin, &files),
+        }
+        .map_err(urdf_err)?;
+        for (link, shape) in &geometry.enclosures {
+            kin.add_shapes(*link, shape.iter().cloned());
         }
         let dof = kin.dof();
         for (name, values) in [
@@ -190,7 +293,14 @@ impl Robot {
             hand_links,
             mount_links,
             allowed_pairs,
+            meshes: geometry.meshes,
         })
+    }
+
+    /// The URDF's collision and visual meshes, each in its link's frame (empty when the URDF
+    /// gives only primitives).
+    pub fn meshes(&self) -> &[LinkMesh] {
+        &self.meshes
     }
 
     /// The robot's name from `robot.toml`.
@@ -422,26 +532,24 @@ mod tests {
     }
 
     fn with_toml(edit: impl Fn(String) -> String) -> Result<Robot, RobotError> {
-        Robot::from_texts(
-            &edit(PANDA_TOML.to_string()),
-            Path::new("r/robot.toml"),
-            PANDA_URDF,
-            Path::new("r/panda.urdf"),
-        )
+        Robot::panda_with(&edit(PANDA_TOML.to_string()))
     }
 
     #[test]
     fn configuration_errors_name_the_file_and_field() {
-        let e = with_toml(|t| t.replace("tcp_link = \"panda_tcp\"", "tcp_link = \"nose\""))
+        let e = with_toml(|t| t.replace("tcp_link = \"fer_hand_tcp\"", "tcp_link = \"nose\""))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("r/panda.urdf") && e.contains("`nose`"), "{e}");
+        assert!(
+            e.contains("robots/panda/fer.urdf") && e.contains("`nose`"),
+            "{e}"
+        );
         let e =
             with_toml(|t| t.replace("acceleration_limits = [15.0, ", "acceleration_limits = ["))
                 .unwrap_err()
                 .to_string();
         assert!(
-            e.contains("r/robot.toml") && e.contains("acceleration_limits has 6"),
+            e.contains("robots/panda/robot.toml") && e.contains("acceleration_limits has 6"),
             "{e}"
         );
         let e = with_toml(|t| t.replace("arm_margin = 0.01", "arm_margin = -1.0"))
@@ -451,7 +559,10 @@ mod tests {
         let e = with_toml(|t| t.replace("name = \"panda\"", "name = 3"))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("r/robot.toml") && e.contains("line"), "{e}");
+        assert!(
+            e.contains("robots/panda/robot.toml") && e.contains("line"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -6,10 +6,51 @@ use crate::intent::TeachStep;
 use crate::layout::{check_layout, Infeasible};
 use crate::motion::Motion;
 use crate::task::{Task, TASK_VERSION};
+use crate::world::{Object, World};
 use akl_tsr::{FileError, TaskSpec, WORLD_FRAME};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// An obstacle file: objects in a task file's world-object format, on their own.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObstacleFile {
+    objects: Vec<Object>,
+}
+
+/// Reads an obstacle file, `{"objects": [...]}` with each object as a task file's world
+/// gives it, poses in the robot base frame: a world with the robot at its origin. Mesh shapes
+/// are found relative to the file; errors name the file and the line or object.
+pub fn load_obstacles(path: &Path) -> Result<World, FileError<SceneError>> {
+    let wrap = |source| FileError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| wrap(SceneError::Io(e)))?;
+    let file: ObstacleFile =
+        serde_json::from_str(&text).map_err(|e| wrap(SceneError::from_json(&e, &text)))?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    let mut names = std::collections::BTreeSet::new();
+    let mut objects = file.objects;
+    for (i, o) in objects.iter_mut().enumerate() {
+        let at = |problem: String| {
+            wrap(SceneError::invalid(
+                format!("objects[{i}] ({})", o.name),
+                problem,
+            ))
+        };
+        if !names.insert(o.name.clone()) {
+            return Err(at("another object has this name".into()));
+        }
+        o.shape.resolve(folder).map_err(|e| at(e.to_string()))?;
+        o.shape.validate().map_err(at)?;
+    }
+    Ok(World {
+        robot_base: akl_tsr::Pose::identity(),
+        objects,
+    })
+}
 
 #[derive(Deserialize)]
 struct VersionProbe {

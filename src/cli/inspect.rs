@@ -28,6 +28,12 @@ pub(crate) enum RobotCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Is a configuration in collision, with what, and how close is each obstacle?
+    ///
+    /// Uses the planner's own collision model and rules: the capsules that enclose the
+    /// robot's meshes, grown by the robot's margins (or by --margin). Exits with 0 when the
+    /// configuration is free, 1 when it is in collision, 2 on bad input.
+    Check(RobotCheckArgs),
     /// Inverse kinematics: the configuration nearest a seed that puts the TCP at a pose.
     ///
     /// The pose is in the robot base frame. Exits with 1 and says "unreachable" if no
@@ -93,4 +99,30 @@ pub(crate) enum SpecCommand {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// `akl robot check`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct RobotCheckArgs {
+    /// Joint positions in radians, comma-separated, base to tip.
+    #[arg(long, value_name = "Q1,...,Qn", allow_hyphen_values = true)]
+    pub joints: String,
+    /// Gripper opening (metres; default: fully open).
+    #[arg(long, value_name = "WIDTH")]
+    pub gripper: Option<f64>,
+    /// Check against a task's world (built-in name or task file), in the task file's layout.
+    #[arg(long, value_name = "TASK", conflicts_with = "obstacles")]
+    pub task: Option<String>,
+    /// Check against obstacles: a JSON file `{"objects": [...]}` in a task file's
+    /// world-object format, poses in the robot base frame.
+    #[arg(long, value_name = "FILE")]
+    pub obstacles: Option<PathBuf>,
+    /// Clearance kept by every link, instead of the robot's margins (0 = the geometry alone).
+    #[arg(long, value_name = "M")]
+    pub margin: Option<f64>,
+    #[command(flatten)]
+    pub robot: RobotArg,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -35,6 +35,10 @@ pub(crate) struct RobotArg {
     /// Robot folder (robot.toml and its URDF); the built-in Franka Panda if omitted.
     #[arg(long, value_name = "DIR")]
     pub robot: Option<PathBuf>,
+    /// Where a ROS package the URDF's `package://` meshes name lies (repeatable); looked up
+    /// before the robot folder's `[packages]` and `ROS_PACKAGE_PATH`.
+    #[arg(long, value_name = "NAME=DIR", requires = "robot")]
+    pub package_path: Vec<akl_planner::meshes::PackagePath>,
 }
 
 /// Trial settings shared by `akl validate`, `relax` and `compare`.

@@ -28,7 +28,10 @@ pub(super) fn run(args: DemoArgs) -> CliResult {
         )));
     }
     let task = super::load_task(&args.task)?;
-    let robot = load_robot(&RobotArg { robot: None })?;
+    let robot = load_robot(&RobotArg {
+        robot: None,
+        package_path: Vec::new(),
+    })?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::input(format!("{}: {e}", args.out.display())))?;
     let demo_path = args.out.join("demo.mcap");

@@ -81,7 +81,10 @@ pub(super) fn run(args: EvalArgs) -> CliResult {
     let names: Vec<String> = tasks.iter().map(|t| t.name.clone()).collect();
     let simulation = match args.execute {
         Some(_) => Some(Simulation {
-            robot: load_robot(&RobotArg { robot: None })?,
+            robot: load_robot(&RobotArg {
+                robot: None,
+                package_path: Vec::new(),
+            })?,
         }),
         None => None,
     };

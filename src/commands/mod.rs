@@ -11,6 +11,7 @@ mod learn;
 mod plan;
 mod relax;
 mod robot;
+mod robot_check;
 mod score;
 mod spec;
 mod task;

@@ -4,6 +4,8 @@ use super::print_json;
 use crate::cli::{RobotArg, RobotCommand};
 use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
+use akl_planner::enclosure::{stand_off, StandOff};
+use akl_planner::meshes::MeshRole;
 use akl_planner::{Geometry, IkError, Robot};
 use akl_tsr::rpy::rpy_from_rotation;
 use akl_tsr::{Pose, PoseJson};
@@ -23,19 +25,20 @@ pub(super) fn run(cmd: RobotCommand) -> CliResult {
             robot,
             json,
         } => ik(&pose, seed_joints.as_deref(), &robot, json),
+        RobotCommand::Check(args) => super::robot_check::run(&args),
     }
 }
 
 /// The robot named by `--robot`, or the built-in Panda.
 pub(crate) fn load(arg: &RobotArg) -> Result<Robot, CliError> {
     match &arg.robot {
-        Some(dir) => Robot::load(dir).map_err(CliError::input),
+        Some(dir) => Robot::load_with(dir, &arg.package_path).map_err(CliError::input),
         None => Robot::panda().map_err(CliError::internal),
     }
 }
 
 /// Parses comma-separated numbers; the error names the flag and the bad item.
-fn numbers(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
+pub(super) fn numbers(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
     text.split(',')
         .map(|item| {
             let item = item.trim();
@@ -48,7 +51,7 @@ fn numbers(text: &str, flag: &str) -> Result<Vec<f64>, CliError> {
 }
 
 /// A joint list checked against the robot (length, limits).
-fn joints(text: &str, flag: &str, robot: &Robot) -> Result<Vec<f64>, CliError> {
+pub(super) fn joints(text: &str, flag: &str, robot: &Robot) -> Result<Vec<f64>, CliError> {
     let q = numbers(text, flag)?;
     robot
         .check_joints(&q)
@@ -71,6 +74,17 @@ struct LinkInfo {
     name: String,
     parent: Option<String>,
     shapes: Vec<akl_planner::LinkShape>,
+    /// The URDF's mesh files of the link, collision and visual.
+    meshes: Vec<MeshInfo>,
+    /// How far the collision model stands off the link's meshes.
+    stand_off: Option<StandOff>,
+}
+
+#[derive(Serialize)]
+struct MeshInfo {
+    role: MeshRole,
+    uri: String,
+    triangles: usize,
 }
 
 #[derive(Serialize)]
@@ -124,10 +138,22 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         margins: c.collision.clone(),
         links: links
             .iter()
-            .map(|l| LinkInfo {
+            .enumerate()
+            .map(|(i, l)| LinkInfo {
                 name: l.name.clone(),
                 parent: l.parent.map(|p| links[p].name.clone()),
                 shapes: l.shapes.clone(),
+                meshes: robot
+                    .meshes()
+                    .iter()
+                    .filter(|m| m.link == i)
+                    .map(|m| MeshInfo {
+                        role: m.role,
+                        uri: m.uri.clone(),
+                        triangles: m.mesh.triangles.len(),
+                    })
+                    .collect(),
+                stand_off: link_stand_off(&robot, i),
             })
             .collect(),
     };
@@ -180,9 +206,16 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         m.arm_margin, m.hand_margin, m.held_margin, m.self_margin
     );
     println!();
-    let mut shapes = Table::new(["link", "parent", "collision shapes"]);
+    let mut shapes = Table::new([
+        "link",
+        "parent",
+        "collision model",
+        "meshes",
+        "stand-off mean / max (mm)",
+    ]);
     for l in &summary.links {
         let described: Vec<String> = l.shapes.iter().map(|s| describe(&s.geometry)).collect();
+        let meshes: usize = l.meshes.iter().map(|m| m.triangles).sum();
         shapes.row(vec![
             l.name.clone(),
             l.parent.clone().unwrap_or_else(|| "-".into()),
@@ -191,14 +224,56 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
             } else {
                 described.join("; ")
             },
+            if l.meshes.is_empty() {
+                "-".into()
+            } else {
+                format!("{} ({meshes} triangles)", l.meshes.len())
+            },
+            l.stand_off.map_or_else(
+                || "-".into(),
+                |s| format!("{:.1} / {:.1}", 1e3 * s.mean, 1e3 * s.max),
+            ),
         ]);
+    }
+    if let Some((mean, max)) = overall(&summary.links) {
+        println!(
+            "collision model: per link, the hull of its collision meshes grown to hold every vertex of its collision and visual meshes; it stands off them {:.1} mm on average, {:.1} mm at most",
+            1e3 * mean,
+            1e3 * max
+        );
     }
     print!("{}", shapes.render());
     Ok(())
 }
 
+/// How far link `link`'s grown hull stands off its meshes (sampled every 5 mm).
+fn link_stand_off(robot: &Robot, link: usize) -> Option<StandOff> {
+    let meshes: Vec<_> = robot.meshes().iter().filter(|m| m.link == link).collect();
+    let hull = robot.links()[link]
+        .shapes
+        .iter()
+        .find(|s| s.role == akl_planner::ShapeRole::Enclosure)?;
+    stand_off(hull, &meshes, 0.005)
+}
+
+/// The mean (weighted equally per link) and largest stand-off over the links that have one.
+fn overall(links: &[LinkInfo]) -> Option<(f64, f64)> {
+    let all: Vec<StandOff> = links.iter().filter_map(|l| l.stand_off).collect();
+    (!all.is_empty()).then(|| {
+        (
+            all.iter().map(|s| s.mean).sum::<f64>() / all.len() as f64,
+            all.iter().map(|s| s.max).fold(0.0, f64::max),
+        )
+    })
+}
+
 fn describe(g: &Geometry) -> String {
     match *g {
+        Geometry::RoundHull(ref h) => format!(
+            "hull of {} vertices + {:.1} mm",
+            h.vertices.len(),
+            1e3 * h.border
+        ),
         Geometry::Capsule { radius, length } => format!("capsule r {radius} × {length}"),
         Geometry::Box { size } => format!("box {}×{}×{}", size[0], size[1], size[2]),
         Geometry::Cylinder { radius, length } => format!("cylinder r {radius} × {length}"),

@@ -8,12 +8,25 @@ use super::model::{Group, RobotCollision};
 use super::scene::{Obstacle, Scene};
 use super::sweep::{Proof, Sweep};
 use crate::contact_rules::{Allowances, LinkRole};
-use crate::robot::{Robot, MAX_BODIES, MAX_LINKS};
+use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
+use smallvec::SmallVec;
 use std::collections::VecDeque;
+
+/// Links whose poses a check keeps on the stack; robots with more spill to the heap.
+const INLINE_LINKS: usize = 32;
+
+/// Collision elements whose placements a check keeps on the stack; more spill to the heap.
+const INLINE_BODIES: usize = 64;
+
+/// Link poses of one configuration.
+pub(super) type LinkPoses = SmallVec<[Pose; INLINE_LINKS]>;
+
+/// Placed collision elements of one configuration.
+pub(super) type PlacedBodies = SmallVec<[Placed; INLINE_BODIES]>;
 
 /// What parry's single-precision distances are trusted to (metres): clearances it reports
 /// are reduced by this much before they are relied on.
@@ -94,7 +107,8 @@ impl<'a> Checker<'a> {
     ) {
         let model = self.model;
         let tcp = poses[model.tcp];
-        let mut axes = [Vector3::zeros(); MAX_LINKS];
+        let mut axes: SmallVec<[Vector3<f64>; INLINE_LINKS]> =
+            SmallVec::from_elem(Vector3::zeros(), poses.len());
         for &(link, axis) in &model.turned {
             axes[link] = poses[link].rotation * axis;
         }
@@ -128,21 +142,21 @@ impl<'a> Checker<'a> {
     /// opening `width` (the bound of [`Checker::edge`], taken about the edge's midpoint).
     pub fn sweep_bound(&self, a: &[f64], b: &[f64], width: f64, held: Option<&Held>) -> f64 {
         let mid: Vec<f64> = a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
-        let n = self.robot.links().len().min(MAX_LINKS);
-        let mut poses = [Pose::identity(); MAX_LINKS];
+        let mut poses = LinkPoses::from_elem(Pose::identity(), self.robot.links().len());
         self.robot
             .kinematics()
-            .link_poses_into(&mid, width, &mut poses[..n]);
-        let mut placed_bodies = [Placed::default(); MAX_BODIES];
-        for (slot, body) in placed_bodies.iter_mut().zip(&self.model.bodies) {
-            *slot = placed(body, &poses[body.link]);
-        }
-        let nb = self.model.bodies.len().min(MAX_BODIES);
+            .link_poses_into(&mid, width, &mut poses);
+        let placed_bodies: PlacedBodies = self
+            .model
+            .bodies
+            .iter()
+            .map(|body| placed(body, &poses[body.link]))
+            .collect();
         let mut sweep = Sweep::new(self.model, a.len());
         for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
             *h = 0.5 * (y - x).abs();
         }
-        self.sweep_bounds(&poses[..n], &placed_bodies[..nb], held, &mut sweep);
+        self.sweep_bounds(&poses, &placed_bodies, held, &mut sweep);
         let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
         (0..last)
             .map(|k| sweep.bounds[self.model.offsets[k]])
@@ -163,24 +177,20 @@ impl<'a> Checker<'a> {
         sweep: Option<&mut Sweep>,
     ) -> Result<f64, Hit> {
         let links = self.robot.links();
-        let n = links.len().min(MAX_LINKS);
-        let mut poses = [Pose::identity(); MAX_LINKS];
+        let mut poses = LinkPoses::from_elem(Pose::identity(), links.len());
         self.robot
             .kinematics()
-            .link_poses_into(q, width, &mut poses[..n]);
-        for p in &mut poses[..n] {
+            .link_poses_into(q, width, &mut poses);
+        for p in &mut poses {
             *p = self.scene.base * *p;
         }
         let model = self.model;
         let bodies = &model.bodies;
-        let nb = bodies.len().min(MAX_BODIES);
-        let mut placed_bodies = [Placed::default(); MAX_BODIES];
-        for (slot, b) in placed_bodies.iter_mut().zip(bodies) {
-            *slot = placed(b, &poses[b.link]);
-        }
-        let placed_bodies = &placed_bodies[..nb];
+        let placed_bodies: PlacedBodies =
+            bodies.iter().map(|b| placed(b, &poses[b.link])).collect();
+        let placed_bodies = &placed_bodies[..];
         let mut proof = sweep.filter(|_| PROVE).map(|s| {
-            self.sweep_bounds(&poses[..n], placed_bodies, held, s);
+            self.sweep_bounds(&poses, placed_bodies, held, s);
             Proof {
                 sweep: s,
                 offsets: &model.offsets,

@@ -21,6 +21,7 @@ mod cull;
 mod held;
 mod hit;
 mod model;
+mod report;
 mod scene;
 mod sweep;
 #[cfg(test)]
@@ -30,4 +31,5 @@ pub use checker::Checker;
 pub use held::Held;
 pub use hit::Hit;
 pub use model::{Group, Margins, RobotCollision};
+pub use report::{CheckReport, Clearance, Contact};
 pub use scene::Scene;

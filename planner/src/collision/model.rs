@@ -75,17 +75,17 @@ pub struct RobotCollision {
 /// shapes, and the simulated hand's palm and pads ([`crate::hand`]), whose box corners reach
 /// past the URDF's capsules: the planner keeps clear whatever the simulated hand can touch.
 pub(super) fn collision_elements(robot: &Robot) -> Vec<(usize, Geometry, Pose)> {
-    let urdf = robot
-        .links()
-        .iter()
-        .enumerate()
-        .flat_map(|(i, link)| link.shapes.iter().map(move |s| (i, s.geometry, s.origin)));
+    let urdf = robot.links().iter().enumerate().flat_map(|(i, link)| {
+        link.shapes
+            .iter()
+            .map(move |s| (i, s.geometry.clone(), s.origin))
+    });
     let hand = HandModel::new(robot).map(|h| h.boxes()).unwrap_or_default();
     urdf.chain(hand).collect()
 }
 
 /// The clearances kept (metres).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Margins {
     /// Arm links against the world.
     pub arm: f64,
@@ -159,8 +159,10 @@ impl RobotCollision {
             };
             let (world_shape, fix) = parry_convert::robot_shape(&geometry, margin);
             let (self_shape, _) = parry_convert::robot_shape(&geometry, 0.5 * margins.self_);
-            let (half_segment, core) = match geometry {
-                Geometry::Capsule { radius, length } => (0.5 * length, radius),
+            // A grown hull is culled by the capsule that holds it.
+            let (half_segment, core) = match &geometry {
+                Geometry::Capsule { radius, length } => (0.5 * length, *radius),
+                Geometry::RoundHull(hull) => (hull.half_length, hull.radius),
                 other => (0.0, other.bounding_radius()),
             };
             bodies.push(Body {

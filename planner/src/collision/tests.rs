@@ -218,7 +218,7 @@ mod parry_false_positive {
         let hand = half
             .bodies
             .iter()
-            .find(|b| robot.links()[b.link].name == "panda_hand")
+            .find(|b| robot.links()[b.link].name == "fer_hand")
             .unwrap();
         let at = placed(hand, &(scene.base * poses[hand.link]));
         let d = parry_convert::distance(&hand.world_shape, &at.pose, &block.shape, &block.pose);

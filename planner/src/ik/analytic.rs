@@ -88,14 +88,22 @@ impl PandaIk {
             path.push(p);
         }
         path.reverse();
+        // Fixed links before joint 1 (such as the FER's root link `base`) are part of the
+        // base when they do not move it.
+        let mut base = links[path[0]].origin;
+        while path.len() > 1 && links[path[1]].motion == Motion::Fixed {
+            base *= links[path[1]].origin;
+            path.remove(0);
+        }
         // path: base, joint 1 .. joint 7, then fixed links to the TCP.
         if path.len() < 1 + DOF {
             return Err("the TCP is not seven joints away from the base".into());
         }
-        if links[path[0]].origin.translation.vector.norm() > 0.0
-            || links[path[0]].origin.rotation.angle() > 0.0
-        {
-            return Err("the base link has a non-identity origin".into());
+        if base.translation.vector.norm() > 1e-12 || base.rotation.angle() > 1e-12 {
+            return Err(format!(
+                "the fixed joints before joint 1 (up to `{}`) move the base; the panda solver needs them to be identities",
+                links[path[0]].joint
+            ));
         }
         let mut ad = [(0.0, 0.0); DOF];
         for (k, &i) in path[1..=DOF].iter().enumerate() {

@@ -141,19 +141,12 @@ impl DlsIk {
 
 #[cfg(test)]
 mod tests {
-    use crate::robot::{Robot, PANDA_TOML, PANDA_URDF};
+    use crate::robot::{Robot, PANDA_TOML};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-    use std::path::Path;
 
     fn dls_panda() -> Robot {
-        Robot::from_texts(
-            &PANDA_TOML.replace("solver = \"panda\"", "solver = \"dls\""),
-            Path::new("robot.toml"),
-            PANDA_URDF,
-            Path::new("panda.urdf"),
-        )
-        .unwrap()
+        Robot::panda_with(&PANDA_TOML.replace("solver = \"panda\"", "solver = \"dls\"")).unwrap()
     }
 
     #[test]

@@ -3,11 +3,10 @@
 use super::*;
 use crate::check::{recheck, RecheckOptions};
 use crate::plan::{GripperAction, SegmentKind};
-use crate::robot::{PANDA_TOML, PANDA_URDF};
+use crate::robot::PANDA_TOML;
 use crate::rrt::RrtOptions;
 use crate::search::plan_task;
 use akl_scene::{builtin, randomize, Object};
-use std::path::Path;
 
 #[test]
 fn a_grasped_object_ends_centred_between_the_fingers_and_squared_on_the_pads() {
@@ -240,13 +239,8 @@ fn a_wall_needs_a_search_and_a_tiny_budget_is_reported() {
 
 #[test]
 fn the_generic_solver_plans_too() {
-    let robot = Robot::from_texts(
-        &PANDA_TOML.replace("solver = \"panda\"", "solver = \"dls\""),
-        Path::new("robot.toml"),
-        PANDA_URDF,
-        Path::new("panda.urdf"),
-    )
-    .unwrap();
+    let robot =
+        Robot::panda_with(&PANDA_TOML.replace("solver = \"panda\"", "solver = \"dls\"")).unwrap();
     let task = builtin::task("pick_place").unwrap().unwrap();
     let plan = plan_in(&robot, "pick_place", &task.world, 1).unwrap();
     assert_sound(&robot, &task.world, &plan);

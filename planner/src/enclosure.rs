@@ -1,0 +1,423 @@
+//! The collision model of links that the URDF gives as meshes: per link, the convex hull of
+//! its collision meshes grown by just enough to hold every vertex of its collision *and*
+//! visual meshes, inside a capsule used to cull.
+//!
+//! Whatever touches the real link touches its surface, and every surface point lies in the
+//! grown hull (a convex shape holding all the vertices holds every triangle), so a model free
+//! of an obstacle proves the real link free of it. The vendor's collision meshes are coarse
+//! hulls of a few hundred triangles, so exact tests stay cheap; the capsule around each hull
+//! lets most pairs be ruled out by a segment distance before any exact test (the checks of
+//! [`crate::collision`]).
+
+use crate::geometry::{Geometry, LinkShape, RoundHull, ShapeRole};
+use crate::meshes::{LinkMesh, MeshRole};
+use akl_mesh::Capsule;
+use akl_tsr::nalgebra::{Point3, Translation3, UnitQuaternion, Vector3};
+use akl_tsr::Pose;
+use parry3d::math::Vector;
+use parry3d::query::PointQuery;
+use std::sync::Arc;
+
+/// Longest triangle edge the capsule fitter sees (metres): a triangle must lie in one
+/// capsule, and cutting long slivers lets the fit follow the shape.
+pub const MAX_EDGE: f64 = 0.01;
+
+/// The grown hull holding `meshes` (all of one link, in its frame), as a collision shape;
+/// `None` when the meshes span no volume.
+pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
+    let collision: Vec<&LinkMesh> = meshes
+        .iter()
+        .copied()
+        .filter(|m| m.role == MeshRole::Collision)
+        .collect();
+    // The vendor's collision meshes when there are any (coarse: few vertices), else all.
+    let base = if collision.is_empty() {
+        meshes
+    } else {
+        &collision[..]
+    };
+    let points: Vec<Vector> = base
+        .iter()
+        .flat_map(|m| &m.mesh.vertices)
+        .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+        .collect();
+    let (vertices, triangles) = parry3d::transformation::try_convex_hull(&points).ok()?;
+    // A hull of no volume (flat meshes) cannot be a solid.
+    let volume: f32 = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| vertices[i as usize]);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    if volume.abs() < 1e-12 {
+        return None;
+    }
+    let vertices: Vec<Point3<f64>> = vertices
+        .iter()
+        .map(|v| Point3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)))
+        .collect();
+    let faces: Vec<[Point3<f64>; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|i| vertices[i as usize]))
+        .collect();
+    // The border: how far the furthest vertex of any mesh lies outside the hull, plus what
+    // single precision may lose.
+    let border = meshes
+        .iter()
+        .flat_map(|m| &m.mesh.vertices)
+        .map(|p| outside_distance(p, &faces))
+        .fold(0.0, f64::max)
+        + 1e-6;
+    // The culling capsule holds the hull's vertices, then grows by the border.
+    let capsule = akl_mesh::enclosing_capsules(&subdivided(faces.iter().copied(), MAX_EDGE), 1)
+        .into_iter()
+        .next()?;
+    let frame = capsule_frame(&capsule);
+    let inverse = frame.inverse();
+    Some(LinkShape {
+        geometry: Geometry::RoundHull(Arc::new(RoundHull {
+            vertices: vertices.iter().map(|v| inverse * v).collect(),
+            triangles,
+            border,
+            half_length: 0.5 * (capsule.b - capsule.a).norm(),
+            radius: capsule.radius + border,
+        })),
+        origin: frame,
+        role: ShapeRole::Enclosure,
+    })
+}
+
+/// How far `p` lies outside the convex polytope bounded by `faces` (0 inside).
+fn outside_distance(p: &Point3<f64>, faces: &[[Point3<f64>; 3]]) -> f64 {
+    let outside = faces.iter().any(|[a, b, c]| {
+        let n = (b - a).cross(&(c - a));
+        n.dot(&(p - a)) > 0.0
+    });
+    if !outside {
+        return 0.0;
+    }
+    faces
+        .iter()
+        .map(|t| point_triangle_distance(p, t))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The triangles cut (halving the longest edge, again and again) until no edge is longer
+/// than `max_edge`: the pieces cover exactly the same surface.
+pub fn subdivided(
+    triangles: impl Iterator<Item = [Point3<f64>; 3]>,
+    max_edge: f64,
+) -> Vec<[Point3<f64>; 3]> {
+    let mut out = Vec::new();
+    let mut stack: Vec<[Point3<f64>; 3]> = Vec::new();
+    for t in triangles {
+        stack.push(t);
+        while let Some(t) = stack.pop() {
+            let edges = [(0, 1), (1, 2), (2, 0)].map(|(i, j)| (t[i] - t[j]).norm());
+            let (longest, length) =
+                edges.iter().enumerate().fold(
+                    (0, 0.0),
+                    |best, (k, &l)| if l > best.1 { (k, l) } else { best },
+                );
+            if length <= max_edge {
+                out.push(t);
+                continue;
+            }
+            let (i, j) = [(0, 1), (1, 2), (2, 0)][longest];
+            let k = 3 - i - j;
+            let mid = t[i] + 0.5 * (t[j] - t[i]);
+            stack.push([t[i], mid, t[k]]);
+            stack.push([mid, t[j], t[k]]);
+        }
+    }
+    out
+}
+
+/// The frame of a capsule: centred on its segment, z along it.
+pub fn capsule_frame(c: &Capsule) -> Pose {
+    let axis = c.b - c.a;
+    let rotation = if axis.norm() > 0.0 {
+        UnitQuaternion::rotation_between(&Vector3::z(), &axis).unwrap_or_else(|| {
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+        })
+    } else {
+        UnitQuaternion::identity()
+    };
+    let centre = c.a + 0.5 * axis;
+    Pose::from_parts(Translation3::from(centre.coords), rotation)
+}
+
+/// How far a link's model stands off its meshes: over points spread on the model's outer
+/// surface, their distance to the nearest mesh point (metres).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct StandOff {
+    /// Mean over the sampled points.
+    pub mean: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// The stand-off of the grown hull `shape` from the triangles of `meshes` (one link's):
+/// points spread on the hull's faces (about one per `spacing` metres), pushed out by the
+/// border, and their distance to the nearest mesh point.
+pub fn stand_off(shape: &LinkShape, meshes: &[&LinkMesh], spacing: f64) -> Option<StandOff> {
+    let Geometry::RoundHull(hull) = &shape.geometry else {
+        return None;
+    };
+    // The meshes as one parry mesh: its bounding-volume tree answers the nearest-point
+    // queries (tens of thousands of triangles, thousands of points).
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for m in meshes {
+        let offset = vertices.len() as u32;
+        vertices.extend(
+            m.mesh
+                .vertices
+                .iter()
+                .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32)),
+        );
+        indices.extend(m.mesh.triangles.iter().map(|t| t.map(|i| i + offset)));
+    }
+    let surface = parry3d::shape::TriMesh::new(vertices, indices).ok()?;
+    let mut sum = 0.0;
+    let mut max: f64 = 0.0;
+    let mut n = 0usize;
+    for t in &hull.triangles {
+        let [a, b, c] = t.map(|i| shape.origin * hull.vertices[i as usize]);
+        let normal = (b - a).cross(&(c - a));
+        if normal.norm() < 1e-12 {
+            continue;
+        }
+        let normal = normal.normalize();
+        let steps = (((b - a).norm().max((c - a).norm())) / spacing)
+            .ceil()
+            .max(1.0) as usize;
+        for i in 0..steps {
+            for j in 0..steps - i {
+                let (u, v) = (
+                    (i as f64 + 1.0 / 3.0) / steps as f64,
+                    (j as f64 + 1.0 / 3.0) / steps as f64,
+                );
+                let p = a + u * (b - a) + v * (c - a) + hull.border * normal;
+                let at = Vector::new(p.x as f32, p.y as f32, p.z as f32);
+                let d = f64::from(surface.distance_to_local_point(at, false));
+                sum += d;
+                max = max.max(d);
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| StandOff {
+        mean: sum / n as f64,
+        max,
+    })
+}
+
+/// The capsule that holds a shape, in the link frame: the capsule itself, or a grown hull's
+/// holding capsule.
+pub fn shape_capsule(s: &LinkShape) -> Option<Capsule> {
+    let (radius, half_length) = match &s.geometry {
+        Geometry::Capsule { radius, length } => (*radius, 0.5 * length),
+        Geometry::RoundHull(h) => (h.radius, h.half_length),
+        _ => return None,
+    };
+    let half = s.origin.rotation * Vector3::new(0.0, 0.0, half_length);
+    let centre = Point3::from(s.origin.translation.vector);
+    Some(Capsule {
+        a: centre - half,
+        b: centre + half,
+        radius,
+    })
+}
+
+/// Distance from `p` to the triangle `t` (exact: the nearest point may lie inside the
+/// triangle, on an edge or at a corner).
+pub fn point_triangle_distance(p: &Point3<f64>, t: &[Point3<f64>; 3]) -> f64 {
+    let [a, b, c] = t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.norm();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.norm();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (ap - v * ab).norm();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.norm();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (ap - w * ac).norm();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (bp - w * (c - b)).norm();
+    }
+    let denom = va + vb + vc;
+    if denom.abs() < f64::MIN_POSITIVE {
+        // A degenerate triangle: its nearest point is on an edge.
+        return [(a, b), (b, c), (c, a)]
+            .iter()
+            .map(|(u, v)| segment_distance(p, u, v))
+            .fold(f64::INFINITY, f64::min);
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    (ap - v * ab - w * ac).norm()
+}
+
+/// Distance from `p` to the segment `u`–`v`.
+fn segment_distance(p: &Point3<f64>, u: &Point3<f64>, v: &Point3<f64>) -> f64 {
+    let d = v - u;
+    let t = if d.norm_squared() > 0.0 {
+        ((p - u).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (u + t * d)).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn mesh(role: MeshRole, vertices: Vec<Point3<f64>>, triangles: Vec<[u32; 3]>) -> LinkMesh {
+        LinkMesh {
+            link: 0,
+            role,
+            uri: String::new(),
+            mesh: akl_mesh::TriMesh {
+                vertices,
+                triangles,
+            },
+        }
+    }
+
+    /// A box's eight corners and twelve faces.
+    fn box_mesh(role: MeshRole, half: [f64; 3], shift: [f64; 3]) -> LinkMesh {
+        let vertices = (0..8)
+            .map(|i| {
+                Point3::new(
+                    shift[0] + if i & 1 == 0 { -half[0] } else { half[0] },
+                    shift[1] + if i & 2 == 0 { -half[1] } else { half[1] },
+                    shift[2] + if i & 4 == 0 { -half[2] } else { half[2] },
+                )
+            })
+            .collect();
+        let triangles = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        mesh(role, vertices, triangles)
+    }
+
+    #[test]
+    fn the_grown_hull_holds_a_visual_mesh_that_pokes_out() {
+        let collision = box_mesh(MeshRole::Collision, [0.05, 0.03, 0.1], [0.0; 3]);
+        // The visual box reaches 3 mm past the collision box along x.
+        let visual = box_mesh(MeshRole::Visual, [0.053, 0.02, 0.05], [0.0; 3]);
+        let shape = enclose(&[&collision, &visual]).unwrap();
+        let Geometry::RoundHull(hull) = &shape.geometry else {
+            panic!("{shape:?}")
+        };
+        assert!((hull.border - 0.003).abs() < 1e-5, "{}", hull.border);
+        // Every vertex of both meshes lies in the grown hull and in the culling capsule.
+        let capsule = shape_capsule(&shape).unwrap();
+        let faces: Vec<[Point3<f64>; 3]> = hull
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| shape.origin * hull.vertices[i as usize]))
+            .collect();
+        for v in collision.mesh.vertices.iter().chain(&visual.mesh.vertices) {
+            assert!(outside_distance(v, &faces) <= hull.border, "{v}");
+            assert!(capsule.depth_outside(v) <= 0.0, "{v}");
+        }
+        // Tight: the hull is the collision box, no bigger.
+        let so = stand_off(&shape, &[&collision, &visual], 0.01).unwrap();
+        // (to what parry's single-precision nearest points resolve)
+        assert!(so.max <= hull.border + 1e-5, "{so:?}");
+    }
+
+    #[test]
+    fn flat_meshes_have_no_hull() {
+        let flat = mesh(
+            MeshRole::Visual,
+            vec![
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2]],
+        );
+        assert!(enclose(&[&flat]).is_none());
+    }
+
+    #[test]
+    fn subdividing_keeps_the_area_and_bounds_the_edges() {
+        let t = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.3, 0.0, 0.0),
+            Point3::new(0.0, 0.05, 0.0),
+        ];
+        let area = |t: &[Point3<f64>; 3]| 0.5 * (t[1] - t[0]).cross(&(t[2] - t[0])).norm();
+        let pieces = subdivided(std::iter::once(t), 0.01);
+        let total: f64 = pieces.iter().map(area).sum();
+        assert!((total - area(&t)).abs() < 1e-12);
+        for p in &pieces {
+            for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                assert!((p[i] - p[j]).norm() <= 0.01);
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn triangle_distance_is_the_least_over_the_triangle(
+            corners in prop::array::uniform9(-1.0f64..1.0),
+            p in prop::array::uniform3(-2.0f64..2.0),
+        ) {
+            let t = [
+                Point3::new(corners[0], corners[1], corners[2]),
+                Point3::new(corners[3], corners[4], corners[5]),
+                Point3::new(corners[6], corners[7], corners[8]),
+            ];
+            let p = Point3::new(p[0], p[1], p[2]);
+            let d = point_triangle_distance(&p, &t);
+            // No point of the triangle is nearer, and some point is (within the grid's step).
+            let mut least = f64::INFINITY;
+            let steps = 60;
+            for i in 0..=steps {
+                for j in 0..=steps - i {
+                    let (u, v) = (i as f64 / steps as f64, j as f64 / steps as f64);
+                    let q = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
+                    least = least.min((p - q).norm());
+                }
+            }
+            prop_assert!(d <= least + 1e-9, "{d} > {least}");
+            let side = (t[1] - t[0]).norm().max((t[2] - t[0]).norm());
+            prop_assert!(least - d <= side / steps as f64 + 1e-9, "{least} vs {d}");
+        }
+    }
+}
