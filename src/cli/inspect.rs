@@ -108,7 +108,7 @@ pub(crate) struct RobotCheckArgs {
     #[arg(long, value_name = "Q1,...,Qn", allow_hyphen_values = true)]
     pub joints: String,
     /// Gripper opening (metres; default: fully open).
-    #[arg(long, value_name = "WIDTH")]
+    #[arg(long, value_name = "WIDTH", allow_negative_numbers = true)]
     pub gripper: Option<f64>,
     /// Check against a task's world (built-in name or task file), in the task file's layout.
     #[arg(long, value_name = "TASK", conflicts_with = "obstacles")]
@@ -118,7 +118,7 @@ pub(crate) struct RobotCheckArgs {
     #[arg(long, value_name = "FILE")]
     pub obstacles: Option<PathBuf>,
     /// Clearance kept by every link, instead of the robot's margins (0 = the geometry alone).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub margin: Option<f64>,
     #[command(flatten)]
     pub robot: RobotArg,
