@@ -53,10 +53,11 @@ pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
     if volume.abs() < 1e-12 {
         return None;
     }
-    let vertices: Vec<Point3<f64>> = vertices
+    let full: Vec<Point3<f64>> = vertices
         .iter()
         .map(|v| Point3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)))
         .collect();
+    let (vertices, triangles) = simplified(&full)?;
     let faces: Vec<[Point3<f64>; 3]> = triangles
         .iter()
         .map(|t| t.map(|i| vertices[i as usize]))
@@ -86,6 +87,92 @@ pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
         origin: frame,
         role: ShapeRole::Enclosure,
     })
+}
+
+/// Most vertices a link's hull keeps: every exact test scans them (parry's support function),
+/// so fewer make checks faster; the border grows by what the dropped ones reach beyond.
+pub const MAX_HULL_VERTICES: usize = 32;
+
+/// How far the dropped vertices may reach beyond the kept ones' hull before more are kept
+/// (metres).
+pub const HULL_TOLERANCE: f64 = 0.002;
+
+/// A hull of a subset of the convex polytope `vertices`: starting from the extreme vertices in
+/// 14 directions, the vertex furthest outside the current hull is added until none is further
+/// than [`HULL_TOLERANCE`] or [`MAX_HULL_VERTICES`] are kept. The caller grows it by what is
+/// left outside.
+fn simplified(vertices: &[Point3<f64>]) -> Option<(Vec<Point3<f64>>, Vec<[u32; 3]>)> {
+    let mut kept: Vec<usize> = Vec::new();
+    for dx in [-1.0, 0.0, 1.0] {
+        for dy in [-1.0, 0.0, 1.0] {
+            for dz in [-1.0, 0.0, 1.0] {
+                let d = Vector3::new(dx, dy, dz);
+                // The 6 axis and 8 diagonal directions.
+                if d.iter().filter(|c| **c != 0.0).count() == 2 || d == Vector3::zeros() {
+                    continue;
+                }
+                let extreme = (0..vertices.len()).max_by(|&a, &b| {
+                    vertices[a]
+                        .coords
+                        .dot(&d)
+                        .total_cmp(&vertices[b].coords.dot(&d))
+                })?;
+                if !kept.contains(&extreme) {
+                    kept.push(extreme);
+                }
+            }
+        }
+    }
+    loop {
+        let points: Vec<Vector> = kept
+            .iter()
+            .map(|&i| {
+                let v = vertices[i];
+                Vector::new(v.x as f32, v.y as f32, v.z as f32)
+            })
+            .collect();
+        let hull = parry3d::transformation::try_convex_hull(&points).ok();
+        let hull = hull.filter(|(_, t)| !t.is_empty());
+        let worst = match &hull {
+            Some((v, t)) => {
+                let faces: Vec<[Point3<f64>; 3]> = t
+                    .iter()
+                    .map(|t| {
+                        t.map(|i| {
+                            let p = v[i as usize];
+                            Point3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z))
+                        })
+                    })
+                    .collect();
+                (0..vertices.len())
+                    .map(|i| (i, outside_distance(&vertices[i], &faces)))
+                    .max_by(|a, b| a.1.total_cmp(&b.1))?
+            }
+            // Too few or flat: keep the vertex furthest from those kept.
+            None => (0..vertices.len())
+                .map(|i| {
+                    let d = kept
+                        .iter()
+                        .map(|&k| (vertices[k] - vertices[i]).norm())
+                        .fold(f64::INFINITY, f64::min);
+                    (i, d)
+                })
+                .max_by(|a, b| a.1.total_cmp(&b.1))?,
+        };
+        let done =
+            worst.1 <= HULL_TOLERANCE || kept.len() >= MAX_HULL_VERTICES || kept.contains(&worst.0);
+        match hull {
+            Some((v, t)) if done => {
+                let v = v
+                    .iter()
+                    .map(|p| Point3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z)))
+                    .collect();
+                return Some((v, t));
+            }
+            None if kept.contains(&worst.0) => return None,
+            _ => kept.push(worst.0),
+        }
+    }
 }
 
 /// How far `p` lies outside the convex polytope bounded by `faces` (0 inside).
