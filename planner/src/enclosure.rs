@@ -89,6 +89,9 @@ pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
     })
 }
 
+/// A convex polytope: its vertices and its faces as triangles of vertex indices.
+type Polytope = (Vec<Point3<f64>>, Vec<[u32; 3]>);
+
 /// Most vertices a link's hull keeps: every exact test scans them (parry's support function),
 /// so fewer make checks faster; the border grows by what the dropped ones reach beyond.
 pub const MAX_HULL_VERTICES: usize = 32;
@@ -101,7 +104,7 @@ pub const HULL_TOLERANCE: f64 = 0.002;
 /// 14 directions, the vertex furthest outside the current hull is added until none is further
 /// than [`HULL_TOLERANCE`] or [`MAX_HULL_VERTICES`] are kept. The caller grows it by what is
 /// left outside.
-fn simplified(vertices: &[Point3<f64>]) -> Option<(Vec<Point3<f64>>, Vec<[u32; 3]>)> {
+fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
     let mut kept: Vec<usize> = Vec::new();
     for dx in [-1.0, 0.0, 1.0] {
         for dy in [-1.0, 0.0, 1.0] {
