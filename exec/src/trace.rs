@@ -3,6 +3,7 @@
 //! Channels (JSON messages):
 //! - `/tf` (`foxglove.FrameTransforms`): every robot link's frame in `world`, over time;
 //! - `/robot` (`foxglove.SceneUpdate`): the links' collision shapes, locked to their frames;
+//! - `/robot/visual` (`foxglove.SceneUpdate`): the links' visual meshes, as models;
 //! - `/objects` (`foxglove.SceneUpdate`): the task's objects, over time;
 //! - `/keyframes` (`foxglove.SceneUpdate`): each keyframe's TSR (its position bounds as a box,
 //!   grounded on the reference's pose when reached) and the TCP reached, green or red;
@@ -781,6 +782,25 @@ mod tests {
             assert_eq!(k["entities"][0]["cubes"].as_array().unwrap().len(), 1);
         }
         assert_eq!(count("/robot"), 1);
+        // The real arm's look: one model per link with a visual mesh, locked to its frame,
+        // its binary STL embedded (base64 in JSON).
+        assert_eq!(count("/robot/visual"), 1);
+        let models = topics["/robot/visual"][0]["entities"].as_array().unwrap();
+        assert_eq!(models.len(), 11);
+        for e in models {
+            let m = &e["models"][0];
+            assert_eq!(m["media_type"], "model/stl");
+            assert!(e["frame_locked"].as_bool().unwrap());
+            assert!(m["data"].as_str().unwrap().len() > 1000);
+        }
+        // The collision model that was checked: a hull per meshed link, drawn as triangles.
+        let hulls = topics["/robot"][0]["entities"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|e| !e["triangles"].as_array().unwrap().is_empty())
+            .count();
+        assert_eq!(hulls, 11);
         assert_eq!(count("/keyframes"), spec.keyframes.len());
         assert_eq!(count("/lines"), 1);
         assert!(frames > 100 && count("/tf") == frames && count("/objects") == frames + 1);
