@@ -174,6 +174,17 @@ fn another_robot_folder_is_loaded_at_run_time() {
         &package,
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // ROS_PACKAGE_PATH finds the package too: a folder holding `franka_description`.
+    let packages = dir.join("share");
+    std::fs::create_dir_all(&packages).unwrap();
+    std::os::unix::fs::symlink(panda, packages.join("franka_description")).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_akl"))
+        .args(["robot", "info", "--robot", dir_arg])
+        .env("ROS_PACKAGE_PATH", &packages)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("fer_link5"), "{}", stdout(&o));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
