@@ -29,6 +29,36 @@ pub enum RobotError {
         /// What is wrong.
         message: String,
     },
+    /// Mesh files the URDF names cannot be found or read: every one of them, not only the
+    /// first.
+    #[error("{}: {} mesh(es) cannot be read:{}", urdf.display(), failures.len(), MeshFailure::list(failures))]
+    Meshes {
+        /// The URDF.
+        urdf: PathBuf,
+        /// Each mesh that failed.
+        failures: Vec<MeshFailure>,
+    },
+}
+
+/// One mesh of a URDF that cannot be used.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshFailure {
+    /// The link whose element names it.
+    pub link: String,
+    /// The URDF's `filename`.
+    pub uri: String,
+    /// Why (the package is unknown, the file is missing or unreadable).
+    pub problem: String,
+}
+
+impl MeshFailure {
+    /// The failures, one indented line each.
+    fn list(failures: &[MeshFailure]) -> String {
+        failures
+            .iter()
+            .map(|f| format!("\n  link `{}`: {}: {}", f.link, f.uri, f.problem))
+            .collect()
+    }
 }
 
 /// Why inverse kinematics found no configuration.

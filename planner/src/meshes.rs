@@ -6,6 +6,7 @@
 //! table, then `ROS_PACKAGE_PATH`), `file://PATH` as a path, anything else relative to the
 //! URDF's folder. The built-in Panda's meshes are embedded in the binary.
 
+use crate::error::MeshFailure;
 use crate::fk::Kinematics;
 use akl_mesh::TriMesh;
 use akl_tsr::nalgebra::{Point3, Vector3};
@@ -186,12 +187,12 @@ fn normalize(path: &Path) -> PathBuf {
 }
 
 /// Every mesh element of the URDF's links, read and placed in its link's frame. The error
-/// names every link whose mesh cannot be read, not only the first.
+/// lists every mesh that cannot be read, not only the first.
 pub fn read_link_meshes(
     urdf: &urdf_rs::Robot,
     kin: &Kinematics,
     files: &MeshFiles,
-) -> Result<Vec<LinkMesh>, String> {
+) -> Result<Vec<LinkMesh>, Vec<MeshFailure>> {
     let mut meshes = Vec::new();
     let mut problems = Vec::new();
     for link in &urdf.links {
@@ -222,18 +223,18 @@ pub fn read_link_meshes(
                         mesh: placed(mesh, &origin, &scale),
                     });
                 }
-                Err(e) => problems.push(format!("link `{}`: {e}", link.name)),
+                Err(problem) => problems.push(MeshFailure {
+                    link: link.name.clone(),
+                    uri: filename.clone(),
+                    problem,
+                }),
             }
         }
     }
     if problems.is_empty() {
         Ok(meshes)
     } else {
-        Err(format!(
-            "{} mesh(es) cannot be read:\n  {}",
-            problems.len(),
-            problems.join("\n  ")
-        ))
+        Err(problems)
     }
 }
 

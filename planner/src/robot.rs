@@ -3,7 +3,7 @@
 
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
-use crate::error::{IkError, RobotError};
+use crate::error::{IkError, MeshFailure, RobotError};
 use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
 use crate::geometry::LinkShape;
 use crate::ik::{DlsIk, IkSolver, PandaIk};
@@ -50,7 +50,7 @@ const PANDA_MESHES: EmbeddedFiles = &[
 
 /// The built-in Panda's meshes and the capsules enclosing them, made once per process (reading
 /// and fitting them takes a tenth of a second; tests build the Panda hundreds of times).
-static PANDA_GEOMETRY: OnceLock<Result<LinkGeometry, String>> = OnceLock::new();
+static PANDA_GEOMETRY: OnceLock<Result<LinkGeometry, Vec<MeshFailure>>> = OnceLock::new();
 
 /// A robot's meshes and, per link, the capsules that enclose them.
 #[derive(Debug, Clone)]
@@ -61,7 +61,11 @@ struct LinkGeometry {
 
 impl LinkGeometry {
     /// Reads the URDF's meshes and fits each meshed link's capsules.
-    fn read(urdf: &urdf_rs::Robot, kin: &Kinematics, files: &MeshFiles) -> Result<Self, String> {
+    fn read(
+        urdf: &urdf_rs::Robot,
+        kin: &Kinematics,
+        files: &MeshFiles,
+    ) -> Result<Self, Vec<MeshFailure>> {
         let meshes = read_link_meshes(urdf, kin, files)?;
         let mut links: Vec<usize> = meshes.iter().map(|m| m.link).collect();
         links.sort_unstable();
@@ -214,7 +218,10 @@ impl Robot {
                 .clone(),
             None => LinkGeometry::read(&urdf, &kin, &files),
         }
-        .map_err(urdf_err)?;
+        .map_err(|failures| RobotError::Meshes {
+            urdf: urdf_path.to_path_buf(),
+            failures,
+        })?;
         for (link, shape) in &geometry.enclosures {
             kin.add_shapes(*link, shape.iter().cloned());
         }
@@ -638,6 +645,30 @@ mod tests {
             e.contains("robots/panda/robot.toml") && e.contains("line"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn every_mesh_that_cannot_be_found_is_listed() {
+        let dir = std::env::temp_dir().join(format!("akl-robot-meshes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("robot.toml"),
+            PANDA_TOML.replace("franka_description = \".\"", ""),
+        )
+        .unwrap();
+        std::fs::write(dir.join("fer.urdf"), PANDA_URDF).unwrap();
+        let e = Robot::load(&dir).unwrap_err();
+        let RobotError::Meshes { urdf, failures } = &e else {
+            panic!("{e}")
+        };
+        assert_eq!(urdf, &dir.join("fer.urdf"));
+        // Nine collision and eleven visual elements, one line each.
+        assert_eq!(failures.len(), 20, "{e}");
+        assert!(failures.iter().any(|f| f.link == "fer_rightfinger"));
+        assert!(failures
+            .iter()
+            .all(|f| f.problem.contains("--package-path franka_description=DIR")));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
