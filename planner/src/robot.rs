@@ -138,6 +138,12 @@ impl Robot {
                 source,
             })
         };
+        if dir.is_dir() && !toml_path.exists() {
+            return Err(RobotError::Config {
+                path: toml_path,
+                message: "not found: a robot folder holds robot.toml (its fields: robots/panda/robot.toml, README \"The robot model\") and the URDF it names".into(),
+            });
+        }
         let toml_text = read(&toml_path)?;
         let config = RobotConfig::from_toml(&toml_text).map_err(|message| RobotError::Config {
             path: toml_path.clone(),
@@ -668,6 +674,18 @@ mod tests {
         assert!(failures
             .iter()
             .all(|f| f.problem.contains("--package-path franka_description=DIR")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_folder_without_robot_toml_says_what_a_robot_folder_holds() {
+        let dir = std::env::temp_dir().join(format!("akl-robot-empty-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let e = Robot::load(&dir).unwrap_err().to_string();
+        assert!(
+            e.contains("robot.toml") && e.contains("holds robot.toml"),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -5,6 +5,12 @@ use std::collections::{BTreeMap, BTreeSet};
 
 /// Parses URDF text and checks that it is a single tree of supported joints.
 pub fn parse(text: &str) -> Result<urdf_rs::Robot, String> {
+    if text.contains("xmlns:xacro") || text.contains("<xacro:") {
+        return Err(
+            "this is a xacro file, not a URDF: expand it first (`xacro robot.urdf.xacro > robot.urdf`, from ROS's xacro package) and name the .urdf in robot.toml"
+                .into(),
+        );
+    }
     let robot = urdf_rs::read_from_string(text).map_err(|e| e.to_string())?;
     validate(&robot)?;
     Ok(robot)
@@ -51,8 +57,10 @@ pub fn validate(robot: &urdf_rs::Robot) -> Result<(), String> {
         if numbers.chain(j.axis.xyz.iter()).any(|v| !v.is_finite()) {
             return Err(at("origin or axis holds a non-finite number".into()));
         }
+        // A fixed joint's axis means nothing (ROS tools accept `<axis xyz="0 0 0"/>` there).
         let axis = j.axis.xyz;
-        if axis.iter().map(|v| v * v).sum::<f64>() < 1e-12 {
+        let moves = !matches!(j.joint_type, urdf_rs::JointType::Fixed);
+        if moves && axis.iter().map(|v| v * v).sum::<f64>() < 1e-12 {
             return Err(at("axis has zero length".into()));
         }
         if matches!(
@@ -125,6 +133,21 @@ mod tests {
         ))
         .unwrap_err();
         assert!(e.contains("mimics unknown joint `nope`"), "{e}");
+    }
+
+    #[test]
+    fn xacro_is_named_and_a_fixed_joint_may_have_no_axis() {
+        let xacro = r#"<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">
+            <xacro:include filename="arm.xacro"/></robot>"#;
+        let e = parse(xacro).unwrap_err();
+        assert!(e.contains("xacro file") && e.contains("expand it"), "{e}");
+        let fixed = TWO_LINKS
+            .replace("revolute", "fixed")
+            .replace(r#"<axis xyz="0 0 1"/>"#, r#"<axis xyz="0 0 0"/>"#);
+        assert!(parse(&fixed).is_ok());
+        let e = parse(&TWO_LINKS.replace(r#"<axis xyz="0 0 1"/>"#, r#"<axis xyz="0 0 0"/>"#))
+            .unwrap_err();
+        assert!(e.contains("axis has zero length"), "{e}");
     }
 
     #[test]
