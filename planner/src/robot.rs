@@ -245,6 +245,20 @@ impl Robot {
                 )));
             }
         }
+        // robot.toml may slow a joint down, never speed it past what its URDF allows.
+        for (name, v) in arm.names.iter().zip(&config.velocity_limits) {
+            let urdf_limit = urdf
+                .joints
+                .iter()
+                .find(|j| j.name == *name)
+                .map(|j| j.limit.velocity)
+                .filter(|l| *l > 0.0);
+            if let Some(limit) = urdf_limit.filter(|l| v > l) {
+                return Err(config_err(format!(
+                    "velocity_limits: {v} rad/s for `{name}` exceeds its URDF limit of {limit} rad/s"
+                )));
+            }
+        }
         for (i, (v, [lo, hi])) in config.ready.iter().zip(&arm.limits).enumerate() {
             if v < lo || v > hi {
                 return Err(config_err(format!(
@@ -697,6 +711,21 @@ mod tests {
         assert!(
             e.contains("/nonexistent/robot/robot.toml") && e.contains("cannot read"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn velocity_limits_may_not_exceed_the_urdf() {
+        let e = with_toml(|t| t.replace("velocity_limits = [2.175,", "velocity_limits = [10.0,"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("fer_joint1") && e.contains("exceeds its URDF limit of 2.175"),
+            "{e}"
+        );
+        assert!(
+            with_toml(|t| t.replace("velocity_limits = [2.175,", "velocity_limits = [1.0,"))
+                .is_ok()
         );
     }
 
