@@ -16,7 +16,7 @@ pub const FURNITURE: Group = Group::GROUP_1;
 /// Collision group of movable objects (held or not).
 pub const OBJECTS: Group = Group::GROUP_2;
 /// Collision group of the robot's links; links never collide with each other in the
-/// simulation (the plan is checked for self-collision, and neighbouring capsules overlap).
+/// simulation (the plan is checked for self-collision, and neighbouring links' models overlap).
 pub const ARM: Group = Group::GROUP_3;
 
 /// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check

@@ -273,7 +273,7 @@ impl Kinematics {
         self.links.iter().position(|l| l.name == name)
     }
 
-    /// Adds collision shapes to link `link` (the capsules enclosing its meshes).
+    /// Adds collision shapes to link `link` (the grown hull enclosing its meshes).
     pub(crate) fn add_shapes(&mut self, link: usize, shapes: impl IntoIterator<Item = LinkShape>) {
         self.links[link].shapes.extend(shapes);
     }

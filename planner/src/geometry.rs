@@ -92,7 +92,7 @@ pub enum ShapeRole {
 }
 
 impl Geometry {
-    /// Converts a k collision geometry; `None` for a mesh (enclosed by capsules instead, see
+    /// Converts a k collision geometry; `None` for a mesh (enclosed by a grown hull instead, see
     /// [`crate::enclosure`]); non-positive sizes are rejected.
     pub fn from_k(geometry: &k::link::Geometry<f64>) -> Result<Option<Self>, String> {
         let g = match geometry {

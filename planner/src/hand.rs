@@ -3,7 +3,7 @@
 //! The simulation grasps with these (a palm that ends where the fingers are mounted, two flat
 //! pads that close on what is between them), and the planner's collision model of the hand
 //! holds them besides the URDF's own shapes, so whatever the simulated hand touches, the
-//! planner kept clear (the boxes reach past the URDF's capsules at their corners). The URDF
+//! planner kept clear (the boxes may reach past the link's own collision shapes). The URDF
 //! shapes fill the space between the fingers, so that planning keeps that space free.
 //! Both are derived from the URDF, so another two-finger robot works the same way:
 //! - each pad is the bounding box of the finger's URDF element that reaches furthest towards
@@ -126,7 +126,7 @@ impl HandModel {
         if links[b].parent != Some(palm_link) {
             return None;
         }
-        // The URDF's own primitives: capsules that enclose meshes reach past the real link.
+        // The URDF's own primitives: the hulls that enclose meshes reach past the real link.
         let shapes = |i: usize| -> Vec<(Geometry, Pose)> {
             links[i]
                 .shapes

@@ -48,11 +48,11 @@ const PANDA_MESHES: EmbeddedFiles = &[
     panda_mesh!("meshes/robot_ee/franka_hand_white/visual/finger.dae"),
 ];
 
-/// The built-in Panda's meshes and the capsules enclosing them, made once per process (reading
+/// The built-in Panda's meshes and the hulls enclosing them, made once per process (reading
 /// and fitting them takes a tenth of a second; tests build the Panda hundreds of times).
 static PANDA_GEOMETRY: OnceLock<Result<LinkGeometry, Vec<MeshFailure>>> = OnceLock::new();
 
-/// A robot's meshes and, per link, the capsules that enclose them.
+/// A robot's meshes and, per link, the grown hull that encloses them.
 #[derive(Debug, Clone)]
 struct LinkGeometry {
     meshes: Arc<[LinkMesh]>,
@@ -60,7 +60,7 @@ struct LinkGeometry {
 }
 
 impl LinkGeometry {
-    /// Reads the URDF's meshes and fits each meshed link's capsules.
+    /// Reads the URDF's meshes and grows each meshed link's hull.
     fn read(
         urdf: &urdf_rs::Robot,
         kin: &Kinematics,

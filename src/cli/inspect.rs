@@ -30,7 +30,7 @@ pub(crate) enum RobotCommand {
     },
     /// Is a configuration in collision, with what, and how close is each obstacle?
     ///
-    /// Uses the planner's own collision model and rules: the capsules that enclose the
+    /// Uses the planner's own collision model and rules: the grown hulls that hold the
     /// robot's meshes, grown by the robot's margins (or by --margin). Exits with 0 when the
     /// configuration is free, 1 when it is in collision, 2 on bad input.
     Check(RobotCheckArgs),

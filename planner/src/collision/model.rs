@@ -73,7 +73,7 @@ pub struct RobotCollision {
 
 /// Every collision element of `robot` as (link, geometry, pose in the link frame): the URDF's
 /// shapes, and the simulated hand's palm and pads ([`crate::hand`]), whose box corners reach
-/// past the URDF's capsules: the planner keeps clear whatever the simulated hand can touch.
+/// past the link's own shapes: the planner keeps clear whatever the simulated hand can touch.
 pub(super) fn collision_elements(robot: &Robot) -> Vec<(usize, Geometry, Pose)> {
     let urdf = robot.links().iter().enumerate().flat_map(|(i, link)| {
         link.shapes
