@@ -147,3 +147,51 @@ impl Checker<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::collision::{Checker, RobotCollision, Scene};
+    use crate::contact_rules::Allowances;
+    use crate::Robot;
+    use rand::{Rng, SeedableRng};
+
+    /// The full report and the planner's first-hit check agree on every configuration: the
+    /// report is free exactly when the check finds nothing, and its pairs include the hit.
+    #[test]
+    fn the_report_agrees_with_the_planners_check() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let world = akl_scene::builtin::task("assembly").unwrap().unwrap().world;
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let allow = Allowances::default();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let (mut free, mut hit) = (0, 0);
+        for _ in 0..2_000 {
+            let q: Vec<f64> = robot
+                .joint_limits()
+                .iter()
+                .map(|[lo, hi]| rng.gen_range(*lo..*hi))
+                .collect();
+            let width = rng.gen_range(0.0..robot.open_width());
+            let first = checker.check(&q, width, None, &allow);
+            let report = checker.report(&q, width);
+            assert_eq!(
+                first.is_none(),
+                report.collisions.is_empty(),
+                "{q:?}: {first:?} against {:?}",
+                report.collisions
+            );
+            if first.is_some() {
+                hit += 1;
+            } else {
+                free += 1;
+            }
+            for c in &report.clearances {
+                assert!(c.distance >= 0.0 && c.distance.is_finite(), "{c:?}");
+            }
+        }
+        // Both kinds were seen.
+        assert!(free > 100 && hit > 100, "{free} free, {hit} in collision");
+    }
+}
