@@ -143,7 +143,7 @@ impl Collision {
 pub struct Extreme {
     /// The value (metres or newtons).
     pub value: f64,
-    /// The pair, e.g. `panda_leftfinger–part`.
+    /// The pair, e.g. `fer_leftfinger–part`.
     pub pair: String,
     /// When (simulated seconds).
     pub t: f64,
@@ -324,7 +324,7 @@ impl ContactLog {
             (Owner::Link(l), Owner::Object(o)) | (Owner::Object(o), Owner::Link(l)) => {
                 let role = roles.roles.get(l).copied().unwrap_or_default();
                 if role.mount && roles.mount.as_deref() == Some(name(o)) {
-                    // The base is fastened to what it stands on; its capsules reach into it.
+                    // The base is fastened to what it stands on; its model reaches into it.
                     return None;
                 }
                 let allowed = contact_rules::link_may_touch(
@@ -403,5 +403,61 @@ impl ContactLog {
     /// The collisions, in the order they first happened.
     pub fn collisions(&self) -> &[Collision] {
         &self.collisions
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_contacts_of_the_arm_or_the_held_object_are_judged() {
+        assert!(watched(Owner::Link(3), Owner::Object(0), None));
+        assert!(watched(Owner::Object(0), Owner::Link(3), Some(1)));
+        // Two objects: only when one of them is in the hand.
+        assert!(!watched(Owner::Object(0), Owner::Object(1), None));
+        assert!(!watched(Owner::Object(0), Owner::Object(1), Some(2)));
+        assert!(watched(Owner::Object(0), Owner::Object(1), Some(1)));
+    }
+
+    #[test]
+    fn an_extreme_keeps_the_largest_value_and_where_it_was() {
+        let mut e = Extreme::default();
+        e.update(5.0, "fer_hand", "table", 1.0);
+        e.update(3.0, "fer_link5", "shelf", 2.0);
+        assert_eq!(
+            (e.value, e.pair.as_str(), e.t),
+            (5.0, "fer_hand–table", 1.0)
+        );
+        e.update(7.5, "held part", "scanner_1", 3.0);
+        assert_eq!(
+            (e.value, e.pair.as_str(), e.t),
+            (7.5, "held part–scanner_1", 3.0)
+        );
+    }
+
+    /// A force counts only once kept up for [`SUSTAIN_STEPS`] steps: a one-step impulse of a
+    /// contact being made reads as nothing, a lasting push as its smallest recent value.
+    #[test]
+    fn a_force_counts_once_it_is_kept_up() {
+        let (a, b) = (
+            ColliderHandle::from_raw_parts(1, 0),
+            ColliderHandle::from_raw_parts(2, 0),
+        );
+        let mut log = ContactLog::default();
+        let mut step = |log: &mut ContactLog, force: f64| {
+            let mut recent = HashMap::new();
+            let kept = log.sustained(a, b, force, &mut recent);
+            log.recent = recent;
+            kept
+        };
+        assert_eq!(step(&mut log, 500.0), 0.0, "an impulse");
+        assert_eq!(step(&mut log, 0.0), 0.0);
+        for _ in 0..SUSTAIN_STEPS - 1 {
+            assert_eq!(step(&mut log, 40.0), 0.0, "not yet kept up");
+        }
+        assert_eq!(step(&mut log, 60.0), 40.0, "the smallest of the window");
+        assert_eq!(step(&mut log, 60.0), 40.0);
+        assert_eq!(step(&mut log, 60.0), 60.0);
     }
 }
