@@ -445,7 +445,7 @@ mod tests {
             ColliderHandle::from_raw_parts(2, 0),
         );
         let mut log = ContactLog::default();
-        let mut step = |log: &mut ContactLog, force: f64| {
+        let step = |log: &mut ContactLog, force: f64| {
             let mut recent = HashMap::new();
             let kept = log.sustained(a, b, force, &mut recent);
             log.recent = recent;
