@@ -30,6 +30,21 @@ fn cubes(path: &Path, points: &[Point3<f64>]) {
     std::fs::write(path, json!({ "objects": objects }).to_string()).unwrap();
 }
 
+/// `akl robot check --json` of `joints` against the obstacle file, on the geometry alone.
+fn check_geometry(joints: &str, obstacles: &Path) -> std::process::Output {
+    akl(&[
+        "robot",
+        "check",
+        "--joints",
+        joints,
+        "--obstacles",
+        obstacles.to_str().unwrap(),
+        "--margin",
+        "0",
+        "--json",
+    ])
+}
+
 fn joints_arg(q: &[f64]) -> String {
     q.iter()
         .map(|v| v.to_string())
@@ -109,17 +124,7 @@ fn every_point_of_every_mesh_is_inside_the_model() {
                 for (k, (q, points)) in half.iter().enumerate() {
                     let file = dir.join(format!("cubes-{}-{k}.json", q[0]));
                     cubes(&file, points);
-                    let o = akl(&[
-                        "robot",
-                        "check",
-                        "--joints",
-                        &joints_arg(q),
-                        "--obstacles",
-                        file.to_str().unwrap(),
-                        "--margin",
-                        "0",
-                        "--json",
-                    ]);
+                    let o = check_geometry(&joints_arg(q), &file);
                     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
                     let hit = colliding_objects(&json(&o));
                     let missed: Vec<usize> = (0..points.len())
@@ -189,17 +194,7 @@ fn the_model_is_tight_around_the_hand_and_the_forearm() {
         assert!(points.len() >= 12, "{name}: {} cubes left", points.len());
         let file = dir.join(format!("{name}.json"));
         cubes(&file, &points);
-        let o = akl(&[
-            "robot",
-            "check",
-            "--joints",
-            READY,
-            "--obstacles",
-            file.to_str().unwrap(),
-            "--margin",
-            "0",
-            "--json",
-        ]);
+        let o = check_geometry(READY, &file);
         assert_eq!(o.status.code(), Some(0), "{name}: {}", stdout(&o));
         let v = json(&o);
         assert_eq!(v["free"], true);

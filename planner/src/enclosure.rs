@@ -10,6 +10,7 @@
 //! [`crate::collision`]).
 
 use crate::geometry::{Geometry, LinkShape, RoundHull, ShapeRole};
+use crate::line::distance_to_segment;
 use crate::meshes::{LinkMesh, MeshRole};
 use akl_mesh::Capsule;
 use akl_tsr::nalgebra::{Point3, Translation3, UnitQuaternion, Vector3};
@@ -36,27 +37,11 @@ pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
     } else {
         &collision[..]
     };
-    let points: Vec<Vector> = base
-        .iter()
-        .flat_map(|m| &m.mesh.vertices)
-        .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
-        .collect();
-    let (vertices, triangles) = parry3d::transformation::try_convex_hull(&points).ok()?;
-    // A hull of no volume (flat meshes) cannot be a solid.
-    let volume: f32 = triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| vertices[i as usize]);
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum();
-    if volume.abs() < 1e-12 {
-        return None;
-    }
-    let full: Vec<Point3<f64>> = vertices
-        .iter()
-        .map(|v| Point3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)))
-        .collect();
+    let points: Vec<Point3<f64>> = base.iter().flat_map(|m| m.mesh.vertices.clone()).collect();
+    // akl-mesh's hull, moved back from its bounding box's centre; flat meshes have none.
+    let named = std::path::Path::new(&base.first()?.uri);
+    let hull = akl_mesh::ConvexHull::of(&points, named).ok()?;
+    let full: Vec<Point3<f64>> = hull.vertices.iter().map(|v| v + hull.offset).collect();
     let (vertices, triangles) = simplified(&full)?;
     let faces: Vec<[Point3<f64>; 3]> = triangles
         .iter()
@@ -363,22 +348,11 @@ pub fn point_triangle_distance(p: &Point3<f64>, t: &[Point3<f64>; 3]) -> f64 {
         // A degenerate triangle: its nearest point is on an edge.
         return [(a, b), (b, c), (c, a)]
             .iter()
-            .map(|(u, v)| segment_distance(p, u, v))
+            .map(|(u, v)| distance_to_segment(&p.coords, &u.coords, &v.coords))
             .fold(f64::INFINITY, f64::min);
     }
     let (v, w) = (vb / denom, vc / denom);
     (ap - v * ab - w * ac).norm()
-}
-
-/// Distance from `p` to the segment `u`–`v`.
-fn segment_distance(p: &Point3<f64>, u: &Point3<f64>, v: &Point3<f64>) -> f64 {
-    let d = v - u;
-    let t = if d.norm_squared() > 0.0 {
-        ((p - u).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (u + t * d)).norm()
 }
 
 #[cfg(test)]

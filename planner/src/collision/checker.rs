@@ -7,7 +7,7 @@ use super::hit::Hit;
 use super::model::{Group, RobotCollision};
 use super::scene::{Obstacle, Scene};
 use super::sweep::{Proof, Sweep};
-use crate::contact_rules::{Allowances, LinkRole};
+use crate::contact_rules::Allowances;
 use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
 use akl_tsr::nalgebra::Vector3;
@@ -164,6 +164,25 @@ impl<'a> Checker<'a> {
             * 2.0
     }
 
+    /// The world poses of the links at `q` with gripper opening `width`, and of the collision
+    /// elements on them.
+    pub(super) fn placements(&self, q: &[f64], width: f64) -> (LinkPoses, PlacedBodies) {
+        let mut poses = LinkPoses::from_elem(Pose::identity(), self.robot.links().len());
+        self.robot
+            .kinematics()
+            .link_poses_into(q, width, &mut poses);
+        for p in &mut poses {
+            *p = self.scene.base * *p;
+        }
+        let placed_bodies = self
+            .model
+            .bodies
+            .iter()
+            .map(|b| placed(b, &poses[b.link]))
+            .collect();
+        (poses, placed_bodies)
+    }
+
     /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
     /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
     /// proved free (see the module documentation). Plain checks are compiled without the
@@ -177,17 +196,9 @@ impl<'a> Checker<'a> {
         sweep: Option<&mut Sweep>,
     ) -> Result<f64, Hit> {
         let links = self.robot.links();
-        let mut poses = LinkPoses::from_elem(Pose::identity(), links.len());
-        self.robot
-            .kinematics()
-            .link_poses_into(q, width, &mut poses);
-        for p in &mut poses {
-            *p = self.scene.base * *p;
-        }
+        let (poses, placed_bodies) = self.placements(q, width);
         let model = self.model;
         let bodies = &model.bodies;
-        let placed_bodies: PlacedBodies =
-            bodies.iter().map(|b| placed(b, &poses[b.link])).collect();
         let placed_bodies = &placed_bodies[..];
         let mut proof = sweep.filter(|_| PROVE).map(|s| {
             self.sweep_bounds(&poses, placed_bodies, held, s);
@@ -241,17 +252,10 @@ impl<'a> Checker<'a> {
         }
         // Robot against the world.
         for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
-            let slack = 0.5
-                * match b.group {
-                    Group::Arm => m.arm,
-                    Group::Hand => m.hand,
-                };
+            let slack = 0.5 * m.world(b.group);
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
             let bounds = bounding_box(p, b.world_radius);
-            let role = LinkRole {
-                hand: b.group == Group::Hand,
-                mount: model.mount_links.contains(&b.link),
-            };
+            let role = model.role(b);
             for o in &self.scene.obstacles {
                 if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;

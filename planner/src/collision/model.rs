@@ -1,6 +1,7 @@
 //! The robot's collision model: its bodies (collision elements grown by their margins),
 //! the joints that move each, and which pairs are checked against each other.
 
+use crate::contact_rules::LinkRole;
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::hand::HandModel;
@@ -97,6 +98,16 @@ pub struct Margins {
     pub self_: f64,
 }
 
+impl Margins {
+    /// The clearance kept between the world and links of `group`.
+    pub fn world(&self, group: Group) -> f64 {
+        match group {
+            Group::Arm => self.arm,
+            Group::Hand => self.hand,
+        }
+    }
+}
+
 /// The arm-driven joints between the base and `link`, base first.
 pub(super) fn chain_to(kin: &Kinematics, link: usize) -> Vec<Mover> {
     let links = kin.links();
@@ -153,10 +164,7 @@ impl RobotCollision {
             } else {
                 Group::Arm
             };
-            let margin = match group {
-                Group::Arm => margins.arm,
-                Group::Hand => margins.hand,
-            };
+            let margin = margins.world(group);
             let (world_shape, fix) = parry_convert::robot_shape(&geometry, margin);
             let (self_shape, _) = parry_convert::robot_shape(&geometry, 0.5 * margins.self_);
             // A grown hull is culled by the capsule that holds it.
@@ -230,6 +238,14 @@ impl RobotCollision {
             self_shared,
             tcp_shared,
             turned,
+        }
+    }
+
+    /// What the contact rules need to know of `body`'s link.
+    pub(super) fn role(&self, body: &Body) -> LinkRole {
+        LinkRole {
+            hand: body.group == Group::Hand,
+            mount: self.mount_links.contains(&body.link),
         }
     }
 

@@ -2,12 +2,9 @@
 //! check` prints. The planner stops at the first collision ([`Checker::check`]); this goes on
 //! to list them all, with the same model, margins and rules.
 
-use super::checker::{Checker, LinkPoses};
-use super::cull::placed;
-use super::model::Group;
-use crate::contact_rules::{self, Allowances, LinkRole};
+use super::checker::Checker;
+use crate::contact_rules::{self, Allowances};
 use crate::parry_convert;
-use akl_tsr::Pose;
 use serde::Serialize;
 
 /// Two things in collision: two links of the robot, or a link and a world object.
@@ -52,16 +49,9 @@ impl Checker<'_> {
     /// gripper opening `width`, holding nothing, and the distance to each object.
     pub fn report(&self, q: &[f64], width: f64) -> CheckReport {
         let links = self.robot.links();
-        let mut poses = LinkPoses::from_elem(Pose::identity(), links.len());
-        self.robot
-            .kinematics()
-            .link_poses_into(q, width, &mut poses);
-        for p in &mut poses {
-            *p = self.scene.base * *p;
-        }
+        let (_, placed_bodies) = self.placements(q, width);
         let model = self.model;
         let bodies = &model.bodies;
-        let placed_bodies: Vec<_> = bodies.iter().map(|b| placed(b, &poses[b.link])).collect();
         let mut collisions = Vec::new();
         let seen = |c: Contact, list: &mut Vec<Contact>| {
             if !list.contains(&c) {
@@ -91,16 +81,10 @@ impl Checker<'_> {
         for o in &self.scene.obstacles {
             let mut nearest: Option<Clearance> = None;
             for (b, p) in bodies.iter().zip(&placed_bodies) {
-                let role = LinkRole {
-                    hand: b.group == Group::Hand,
-                    mount: model.mount_links.contains(&b.link),
-                };
+                let role = model.role(b);
                 let unchecked =
                     contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), &allow);
-                let margin = match b.group {
-                    Group::Arm => model.margins.arm,
-                    Group::Hand => model.margins.hand,
-                };
+                let margin = model.margins.world(b.group);
                 if !unchecked
                     && parry_convert::intersects(&b.world_shape, &p.pose, &o.shape, &o.pose)
                 {

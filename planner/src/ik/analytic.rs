@@ -552,4 +552,40 @@ mod tests {
         );
         assert!(robot.ik_solutions(&far, robot.ready(), 4).is_empty());
     }
+
+    /// The FER's root link `base` sits before joint 1 on a fixed joint: accepted while that
+    /// joint does not move the base, refused (naming it) when it does.
+    #[test]
+    fn fixed_links_before_joint_1_must_not_move_the_base() {
+        let kinematics = |urdf: &str| {
+            let robot = crate::urdf_load::parse(urdf).unwrap();
+            let chain = crate::urdf_load::chain(&robot);
+            let fingers = [
+                "fer_finger_joint1".to_string(),
+                "fer_finger_joint2".to_string(),
+            ];
+            let (kin, arm) =
+                Kinematics::compile(&chain, "fer_hand_tcp", &fingers, &crate::fk::Mimics::new())
+                    .unwrap();
+            PandaIk::from_kinematics(&kin, &arm.limits)
+        };
+        let urdf = crate::robot::PANDA_URDF;
+        assert!(kinematics(urdf).is_ok());
+        let base_joint = r#"<child link="fer_link0"/>
+    <origin rpy="0 0 0" xyz="0 0 0"/>"#;
+        assert!(urdf.contains(base_joint));
+        for moved in ["0 0 0.1", "0.05 0 0"] {
+            let e = kinematics(&urdf.replace(
+                base_joint,
+                &format!(
+                    "<child link=\"fer_link0\"/>\n    <origin rpy=\"0 0 0\" xyz=\"{moved}\"/>"
+                ),
+            ))
+            .unwrap_err();
+            assert!(
+                e.contains("move the base") && e.contains("fer_base_joint"),
+                "{e}"
+            );
+        }
+    }
 }
