@@ -311,6 +311,19 @@ fn bad_input_is_named_with_exit_2() {
     let dir = scratch("robot-check-bad");
     let broken = dir.join("broken.json");
     std::fs::write(&broken, "{\"objects\": [\n  {\"name\": \"a\"}\n]}").unwrap();
+    let cube = |name: &str, size: f64| {
+        json!({"name": name, "shape": {"type": "box", "size": [size, size, size]},
+               "pose": {"p": [0.5, 0.0, 0.5], "q": [0.0, 0.0, 0.0, 1.0]},
+               "movable": false, "mass": 0.0, "friction": 0.5})
+    };
+    let twice = dir.join("twice.json");
+    std::fs::write(
+        &twice,
+        json!({"objects": [cube("a", 0.1), cube("a", 0.1)]}).to_string(),
+    )
+    .unwrap();
+    let flat = dir.join("flat.json");
+    std::fs::write(&flat, json!({"objects": [cube("a", 0.0)]}).to_string()).unwrap();
     for (args, expected) in [
         (vec!["--joints", "0,0,0"], "expected 7 joint values"),
         (vec!["--joints", READY, "--margin", "-1"], "--margin"),
@@ -326,6 +339,14 @@ fn bad_input_is_named_with_exit_2() {
         (
             vec!["--joints", READY, "--task", "no_such_task"],
             "no_such_task",
+        ),
+        (
+            vec!["--joints", READY, "--obstacles", twice.to_str().unwrap()],
+            "another object has this name",
+        ),
+        (
+            vec!["--joints", READY, "--obstacles", flat.to_str().unwrap()],
+            "objects[0] (a)",
         ),
     ] {
         let mut all = vec!["robot", "check"];
