@@ -4,7 +4,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use akl_learn::calibration::Calibration;
+use akl_learn::calibration::{Calibration, Motion};
 use akl_learn::demo::{Answer, Demo, DialogueKind};
 use akl_learn::measures::{score, Tolerance};
 use akl_learn::okl::OklParams;
@@ -223,12 +223,7 @@ pub fn run_study(
 /// The participant's calibration from its own line and circle (thesis §4.4).
 fn calibrate(p: &Participant) -> Calibrated {
     let fitted = calibration_demos(&p.profile, p.seed).and_then(|(line, circle)| {
-        let positions = |d: &Demo| {
-            d.ee.iter()
-                .map(|e| e.translation.vector)
-                .collect::<Vec<_>>()
-        };
-        Calibration::fit(&positions(&line), &positions(&circle)).map_err(|e| e.to_string())
+        Calibration::fit(&Motion::of(&line), &Motion::of(&circle)).map_err(|e| e.to_string())
     });
     match fitted {
         Ok(calibration) => Calibrated {

@@ -61,8 +61,8 @@ fn detector(c: &mut Criterion) {
     group.bench_function("push_per_frame", |b| {
         b.iter(|| {
             let mut det = Detector::new(Calibration::default());
-            for p in &positions {
-                black_box(det.push(*p));
+            for (t, p) in d.times.iter().zip(&positions) {
+                black_box(det.push(*t, *p));
             }
             det.constrained()
         })

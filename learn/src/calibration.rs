@@ -8,29 +8,71 @@ use k::nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::line_error::line_error;
+use crate::demo::Demo;
+use crate::detector::Straightness;
 
-/// The calibration file version.
-pub const CALIBRATION_VERSION: u32 = 1;
+/// The calibration file version: 2 since the detector samples finer and measures eq. 3.2 over a
+/// window ([`Sampling`]); a version 1 file was fitted to the 5 cm signal and means nothing to it.
+pub const CALIBRATION_VERSION: u32 = 2;
 
-/// The thesis's distance filter D_F (m).
-pub const FILTER_DISTANCE: f64 = 0.05;
+/// How the detector samples the path (see [`crate::detector`]): its distance filter step D_F
+/// and the window of eq. 3.2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampling {
+    /// Distance filter step D_F (m).
+    pub filter_distance: f64,
+    /// Eq. 3.2 is measured on filtered points this many steps apart.
+    pub window: u32,
+    /// Positions are averaged over this many seconds before the filter (0: not at all).
+    pub smoothing: f64,
+}
 
-/// Consecutive confidently straight filtered points needed to switch: 2 points = 10 cm of line at
-/// D_F = 5 cm, on top of the 2 points eq. 3.2 needs before its first error. Fewer let short
-/// accidental straight stretches of free motion trigger queries; more delay detection beyond the
-/// shortest lines of the built-in tasks (26 cm).
+impl Sampling {
+    /// The widest window the detector supports.
+    pub const MAX_WINDOW: u32 = 12;
+
+    /// The path one distance error spans: `2·window` filter steps (m).
+    pub fn span(&self) -> f64 {
+        2.0 * f64::from(self.window) * self.filter_distance
+    }
+}
+
+/// The detector's sampling, chosen by measurement: D_F = 1 cm, eq. 3.2 over points 3 cm apart
+/// (each error spans 6 cm of path), positions averaged over 0.1 s (a period of 10 Hz tremor).
+///
+/// The shortest required line it asks about is 10 cm: a descent into a fixture and the pull of
+/// a handle of 10 cm were asked about and learned as lines in 10 of 10 seeds for the default
+/// teacher and for a first-time teacher, 8 cm in at most 2. A line needs a whole window (6 cm)
+/// plus a step per further error the tank needs, plus the last step, which the hand stopping at
+/// the line's end never completes: about 9 cm. Measured with `cargo test --release -p akl-learn
+/// --test detection detector_survey -- --ignored --nocapture` on the built-in tasks (10 seeds,
+/// default, first-time and straight-moving teachers), both teachers' calibration circles, and
+/// the 8–15 cm lines: at D_F = 5 cm (the thesis) no line under 18 cm was asked about; at 1 cm
+/// without smoothing the 10 cm lines were missed in up to 4 of 10 seeds and the first-time
+/// teacher's free reaches drew 14 queries (tremor shows as bends at that step); smoothing over
+/// 0.06 s left 5, over 0.1 s 3 (the detector before drew 11); a 2 cm window (4 cm span) drew 57,
+/// a 4 cm window missed 10 cm lines; D_F = 0.8 cm with a 4-step window drew 14 and 1.2 cm missed
+/// 10 cm lines. No sampling asked about the calibration circles.
+pub const SAMPLING: Sampling = Sampling {
+    filter_distance: 0.01,
+    window: 3,
+    smoothing: 0.1,
+};
+
+/// Consecutive confidently straight distance errors needed to switch: 2, one filter step apart.
+/// With 3 the first-time teacher's free reaches drew no query but 10 cm descents were asked
+/// about in only 7 of 10 seeds (the survey of [`SAMPLING`]).
 pub const SWITCH_POINTS: f64 = 2.0;
 
 /// Where T_d sits between the mean squared switching probability on unconstrained motion and on
-/// constrained motion: halfway, so that the tank fills only while most filtered points look
-/// straight. Lower values let isolated straight-looking points of curved motion add up over a
-/// whole reach. Measured with `cargo test --release -p akl-learn --test detection
-/// detector_survey -- --ignored --nocapture` (60 demos: the default teacher, and the same
+/// constrained motion: halfway, so that the tank fills only while most errors look straight.
+/// Lower values let isolated straight-looking errors of curved motion add up over a whole
+/// reach. Measured at the thesis's 5 cm sampling (60 demos: the default teacher, and the same
 /// teacher moving straight wherever it is free to): with the 0.3 m calibration circle, queries
 /// on curved motion were 12 at 0.1, 0 at 0.5 and 0 at 0.7, while every required line and 119 of
 /// 130 unintended lines were asked about in each case; with a 0.12 m circle there were 124 to
-/// 300 whatever the fraction. 0.5 is the fraction with a symmetric meaning.
+/// 300 whatever the fraction. 0.5 is the fraction with a symmetric meaning; at the finer
+/// sampling it leaves no query on the default teacher's curves (the survey of [`SAMPLING`]).
 pub const DISSIPATION_FRACTION: f64 = 0.5;
 
 /// How the energy tank's T_d and T_s follow from the fitted model (the thesis infers them from
@@ -67,8 +109,24 @@ pub struct Calibration {
     pub tank_dissipation: f64,
     /// Tank switching threshold, T_s.
     pub tank_threshold: f64,
-    /// Distance filter D_F (m).
+    /// Distance filter step D_F (m).
     pub filter_distance: f64,
+    /// Eq. 3.2 is measured on filtered points this many steps apart ([`Sampling::window`]).
+    #[serde(default = "default_window")]
+    pub window: u32,
+    /// Seconds over which positions are averaged before the filter ([`Sampling::smoothing`]).
+    #[serde(default = "default_smoothing")]
+    pub smoothing: f64,
+}
+
+/// The window of a file that does not give one.
+fn default_window() -> u32 {
+    SAMPLING.window
+}
+
+/// The smoothing of a file that does not give one.
+fn default_smoothing() -> f64 {
+    SAMPLING.smoothing
 }
 
 impl Default for Calibration {
@@ -78,11 +136,13 @@ impl Default for Calibration {
     fn default() -> Self {
         Calibration {
             akl_calibration: CALIBRATION_VERSION,
-            beta0: -12.4,
-            beta1: 2400.0,
-            tank_dissipation: 0.48,
-            tank_threshold: 0.97,
-            filter_distance: FILTER_DISTANCE,
+            beta0: -7.7,
+            beta1: 4650.0,
+            tank_dissipation: 0.49,
+            tank_threshold: 0.99,
+            filter_distance: SAMPLING.filter_distance,
+            window: SAMPLING.window,
+            smoothing: SAMPLING.smoothing,
         }
     }
 }
@@ -138,7 +198,7 @@ impl Calibration {
     }
 
     /// Fits a calibration to a straight-line demonstration (labelled constrained) and a circle
-    /// demonstration (labelled unconstrained), given as end-effector positions.
+    /// demonstration (labelled unconstrained), given as end-effector motions.
     ///
     /// β0, β1 maximize the likelihood (Newton's method with a tiny ridge, so perfectly separable
     /// data still gives finite parameters). T_d and T_s then follow from the fitted model on the
@@ -146,28 +206,27 @@ impl Calibration {
     /// the circle, T_d = m_u + [`DISSIPATION_FRACTION`]·(m_c − m_u) and
     /// T_s = [`SWITCH_POINTS`]·(m_c − T_d), raised if needed so that the tank never fills on the
     /// circle itself.
-    pub fn fit(
-        line: &[Vector3<f64>],
-        circle: &[Vector3<f64>],
-    ) -> Result<Calibration, CalibrationError> {
-        Calibration::fit_with(line, circle, &TankRule::default())
+    pub fn fit(line: &Motion, circle: &Motion) -> Result<Calibration, CalibrationError> {
+        Calibration::fit_with(line, circle, SAMPLING, &TankRule::default())
     }
 
-    /// [`Calibration::fit`] with another rule for the tank parameters (for surveys).
+    /// [`Calibration::fit`] at another sampling and with another rule for the tank parameters
+    /// (for surveys).
     pub fn fit_with(
-        line: &[Vector3<f64>],
-        circle: &[Vector3<f64>],
+        line: &Motion,
+        circle: &Motion,
+        sampling: Sampling,
         rule: &TankRule,
     ) -> Result<Calibration, CalibrationError> {
-        let line_errors = filtered_errors(line, FILTER_DISTANCE);
-        let circle_errors = filtered_errors(circle, FILTER_DISTANCE);
+        let line_errors = filtered_errors(line, sampling);
+        let circle_errors = filtered_errors(circle, sampling);
         for (which, errors) in [("line", &line_errors), ("circle", &circle_errors)] {
             if errors.len() < MIN_POINTS {
                 return Err(CalibrationError::TooShort {
                     which,
                     points: errors.len(),
                     needed: MIN_POINTS,
-                    filter: FILTER_DISTANCE,
+                    filter: sampling.filter_distance,
                 });
             }
         }
@@ -186,7 +245,9 @@ impl Calibration {
             beta1,
             tank_dissipation: 0.0,
             tank_threshold: 0.0,
-            filter_distance: FILTER_DISTANCE,
+            filter_distance: sampling.filter_distance,
+            window: sampling.window,
+            smoothing: sampling.smoothing,
         };
         let squared_switch = |errors: &[f64]| {
             mean(
@@ -221,15 +282,24 @@ impl Calibration {
         (self.tank_threshold / per_point).ceil().clamp(1.0, 100.0) as u32
     }
 
+    /// The detector's sampling: its filter step and window.
+    pub fn sampling(&self) -> Sampling {
+        Sampling {
+            filter_distance: self.filter_distance,
+            window: self.window,
+            smoothing: self.smoothing,
+        }
+    }
+
     /// The line distance error (m) at which motion is as likely constrained as not.
     pub fn boundary(&self) -> f64 {
         -self.beta0 / self.beta1
     }
 
     /// How this calibration classifies the filtered points of a line and a circle.
-    pub fn separation(&self, line: &[Vector3<f64>], circle: &[Vector3<f64>]) -> Separation {
-        let classify = |positions: &[Vector3<f64>], unconstrained: bool| {
-            let errors = filtered_errors(positions, self.filter_distance);
+    pub fn separation(&self, line: &Motion, circle: &Motion) -> Separation {
+        let classify = |motion: &Motion, unconstrained: bool| {
+            let errors = filtered_errors(motion, self.sampling());
             let right = errors
                 .iter()
                 .filter(|d| (self.probability_unconstrained(**d) > 0.5) == unconstrained)
@@ -273,8 +343,16 @@ impl Calibration {
     pub fn validate(&self) -> Result<(), String> {
         if self.akl_calibration != CALIBRATION_VERSION {
             return Err(format!(
-                "unsupported akl_calibration version {}",
+                "unsupported akl_calibration version {} (this build reads {CALIBRATION_VERSION}: \
+                 the detector's signal changed, so calibrate again with `akl calibrate`)",
                 self.akl_calibration
+            ));
+        }
+        if !(1..=Sampling::MAX_WINDOW).contains(&self.window) {
+            return Err(format!(
+                "window {} is outside 1..={}",
+                self.window,
+                Sampling::MAX_WINDOW
             ));
         }
         if !self.beta1.is_finite() || self.beta1 <= 0.0 || !self.beta0.is_finite() {
@@ -283,10 +361,11 @@ impl Calibration {
         let usable = (0.0..1.0).contains(&self.tank_dissipation)
             && self.tank_threshold > 0.0
             && self.tank_threshold.is_finite()
-            && self.filter_distance > 0.0;
+            && self.filter_distance > 0.0
+            && (0.0..=1.0).contains(&self.smoothing);
         if !usable {
             return Err(
-                "0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0 and filter_distance > 0 are required"
+                "0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0, filter_distance > 0 and 0 ≤ smoothing ≤ 1 s are required"
                     .into(),
             );
         }
@@ -294,16 +373,33 @@ impl Calibration {
     }
 }
 
-/// The eq. 3.2 distance errors of a whole trajectory after the distance filter.
-pub fn filtered_errors(positions: &[Vector3<f64>], filter: f64) -> Vec<f64> {
-    let mut kept: Vec<Vector3<f64>> = Vec::new();
-    for p in positions {
-        if kept.last().is_none_or(|last| (p - last).norm() >= filter) {
-            kept.push(*p);
+/// A recorded hand motion as calibration reads it: end-effector positions and their times.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Motion {
+    /// Time of each position (s, increasing).
+    pub times: Vec<f64>,
+    /// End-effector positions (m).
+    pub positions: Vec<Vector3<f64>>,
+}
+
+impl Motion {
+    /// The end-effector motion of a recorded demonstration.
+    pub fn of(demo: &Demo) -> Motion {
+        Motion {
+            times: demo.times.clone(),
+            positions: demo.ee.iter().map(|p| p.translation.vector).collect(),
         }
     }
-    kept.windows(3)
-        .map(|w| line_error(&w[0], &w[1], &w[2]))
+}
+
+/// The eq. 3.2 distance errors of a whole motion at `sampling`, as the detector sees them.
+pub fn filtered_errors(motion: &Motion, sampling: Sampling) -> Vec<f64> {
+    let mut signal = Straightness::new(sampling);
+    motion
+        .times
+        .iter()
+        .zip(&motion.positions)
+        .filter_map(|(t, p)| signal.push(*t, *p))
         .collect()
 }
 
@@ -352,23 +448,27 @@ fn logistic_fit(constrained: &[f64], unconstrained: &[f64]) -> (f64, f64) {
 mod tests {
     use super::*;
 
-    fn noisy_line(n: usize, noise: f64) -> Vec<Vector3<f64>> {
-        (0..n)
-            .map(|i| {
-                let s = i as f64 * 0.002;
-                let wobble = noise * ((i as f64) * 0.7).sin();
-                Vector3::new(s, wobble, 0.3 + wobble * 0.5)
-            })
-            .collect()
+    /// `n` positions at 100 Hz.
+    fn motion(n: usize, at: impl Fn(usize) -> Vector3<f64>) -> Motion {
+        Motion {
+            times: (0..n).map(|i| i as f64 * 0.01).collect(),
+            positions: (0..n).map(at).collect(),
+        }
     }
 
-    fn circle(n: usize, radius: f64) -> Vec<Vector3<f64>> {
-        (0..n)
-            .map(|i| {
-                let a = i as f64 * 0.002 / radius;
-                Vector3::new(radius * a.cos(), radius * a.sin(), 0.3)
-            })
-            .collect()
+    fn noisy_line(n: usize, noise: f64) -> Motion {
+        motion(n, |i| {
+            let s = i as f64 * 0.002;
+            let wobble = noise * ((i as f64) * 0.7).sin();
+            Vector3::new(s, wobble, 0.3 + wobble * 0.5)
+        })
+    }
+
+    fn circle(n: usize, radius: f64) -> Motion {
+        motion(n, |i| {
+            let a = i as f64 * 0.002 / radius;
+            Vector3::new(radius * a.cos(), radius * a.sin(), 0.3)
+        })
     }
 
     #[test]
@@ -377,8 +477,8 @@ mod tests {
         let circle = circle(1200, 0.12);
         let calibration = Calibration::fit(&line, &circle).unwrap();
         assert!(calibration.beta1 > 0.0);
-        let line_errors = filtered_errors(&line, FILTER_DISTANCE);
-        let circle_errors = filtered_errors(&circle, FILTER_DISTANCE);
+        let line_errors = filtered_errors(&line, SAMPLING);
+        let circle_errors = filtered_errors(&circle, SAMPLING);
         assert!(line_errors
             .iter()
             .all(|d| calibration.probability_unconstrained(*d) < 0.5));
@@ -393,8 +493,8 @@ mod tests {
 
     #[test]
     fn the_fit_maximizes_the_penalized_likelihood() {
-        let line = filtered_errors(&noisy_line(400, 0.004), FILTER_DISTANCE);
-        let circle = filtered_errors(&circle(1200, 0.3), FILTER_DISTANCE);
+        let line = filtered_errors(&noisy_line(400, 0.004), SAMPLING);
+        let circle = filtered_errors(&circle(1200, 0.3), SAMPLING);
         let (b0, b1) = logistic_fit(&line, &circle);
         let log_likelihood = |b0: f64, b1: f64| {
             let ll = |d: &f64, y: f64| {
@@ -428,10 +528,10 @@ mod tests {
     fn degenerate_calibration_data_is_a_clear_error() {
         let line = noisy_line(400, 0.002);
         assert!(matches!(
-            Calibration::fit(&line[..20], &circle(1200, 0.12)),
+            Calibration::fit(&noisy_line(20, 0.002), &circle(1200, 0.12)),
             Err(CalibrationError::TooShort { which: "line", .. })
         ));
-        let still = vec![Vector3::new(0.1, 0.2, 0.3); 500];
+        let still = motion(500, |_| Vector3::new(0.1, 0.2, 0.3));
         assert!(matches!(
             Calibration::fit(&line, &still),
             Err(CalibrationError::TooShort {

@@ -142,7 +142,7 @@ impl<'a> TeachingSession<'a> {
         let switch = if command {
             None
         } else {
-            self.detector.push(position)
+            self.detector.push(t, position)
         };
         let mut events = Vec::new();
         if let Some(switch) = switch.filter(|s| s.constrained) {
@@ -169,7 +169,7 @@ impl<'a> TeachingSession<'a> {
         self.demo.detector.push(self.detector.constrained());
         if command {
             self.detector.reset();
-            self.detector.push(position);
+            self.detector.push(t, position);
         }
         if let Some(sink) = self.sink.as_deref_mut() {
             sink.frame(&self.demo, index)?;

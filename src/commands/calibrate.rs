@@ -3,11 +3,9 @@
 use super::print_json;
 use crate::cli::CalibrateArgs;
 use crate::exit::{CliError, CliResult};
-use akl_learn::calibration::{Calibration, Separation};
+use akl_learn::calibration::{Calibration, Motion, Separation};
 use akl_learn::recording::read_demo_file;
 use akl_learn::teacher::calibration_demos;
-use akl_learn::Demo;
-use akl_tsr::nalgebra::Vector3;
 use serde::Serialize;
 use std::path::Path;
 
@@ -27,14 +25,14 @@ pub(super) fn run(args: CalibrateArgs) -> CliResult {
         let profile = super::profile(&args.profile)?;
         let (line, circle) = calibration_demos(&profile, args.seed).map_err(CliError::input)?;
         let source = format!("simulated teacher `{}`, seed {}", args.profile, args.seed);
-        (positions(&line), positions(&circle), source)
+        (Motion::of(&line), Motion::of(&circle), source)
     } else {
         // clap requires both files unless --simulate.
         let (Some(l), Some(c)) = (&args.line, &args.circle) else {
             return Err(CliError::input("give --line and --circle, or --simulate"));
         };
         let source = format!("line {}, circle {}", l.display(), c.display());
-        (read_positions(l)?, read_positions(c)?, source)
+        (read_motion(l)?, read_motion(c)?, source)
     };
     let calibration = Calibration::fit(&line, &circle).map_err(CliError::input)?;
     calibration
@@ -74,14 +72,10 @@ pub(super) fn run(args: CalibrateArgs) -> CliResult {
     Ok(())
 }
 
-fn positions(demo: &Demo) -> Vec<Vector3<f64>> {
-    demo.ee.iter().map(|p| p.translation.vector).collect()
-}
-
-fn read_positions(path: &Path) -> Result<Vec<Vector3<f64>>, CliError> {
+fn read_motion(path: &Path) -> Result<Motion, CliError> {
     let loaded = read_demo_file(path).map_err(CliError::input)?;
     if let Some(t) = &loaded.truncation {
         eprintln!("warning: {}: {t}", path.display());
     }
-    Ok(positions(&loaded.demo))
+    Ok(Motion::of(&loaded.demo))
 }

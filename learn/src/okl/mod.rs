@@ -75,23 +75,23 @@ pub enum LearnError {
 /// TSR bounds open; the defaults and how they were chosen are on each field.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OklParams {
-    /// D_F, the online detector's distance filter step: 0.05 m (thesis §4.1).
+    /// D_F, the online detector's distance filter step: 0.01 m with the shipped calibration
+    /// (the thesis's 5 cm asked about no line under 18 cm; see
+    /// [`crate::calibration::SAMPLING`]).
     pub filter_distance: f64,
     /// How far (metres) a detected region runs on past the end of its line, cut off by
-    /// `getTrueLine`: the distance filter's delay times the filtered points the detector's tank
-    /// needs to switch ([`Calibration::switch_points`]). The thesis cuts one D_F; with the
-    /// shipped calibration the tank needs two points, so the default is 2·D_F = 0.1 m — with one
-    /// D_F, the default teacher's `inspection` lines kept 5 cm of the following reach and their
-    /// ends came out 2–6 cm long (`learn/tests/methods.rs`).
+    /// `getTrueLine` ([`overshoot`]: 0.05 m by default). The thesis cuts one D_F, right for a
+    /// detector that switches on one filtered point; this detector needs its window and its
+    /// tank's errors past the line's end before it switches off, and with too short a cut the
+    /// default teacher's `inspection` lines kept part of the following reach and their ends came
+    /// out long (`learn/tests/methods.rs`).
     pub overshoot: f64,
     /// How far (metres) the hand had already moved along a line when the detector switched on,
-    /// at the least: the filtered points the tank needs ([`Calibration::switch_points`]) times
-    /// D_F, 0.1 m by default (the errors of those points, each measured against the two points
-    /// before it, were all straight). The line is fitted from that far before the detected
-    /// region, within its segment. The thesis starts the fit at the region's start; a teacher
-    /// who slows down at the end of a short line (the first-time teacher's 26 cm pipe slide,
-    /// `assembly` seed 0) is detected only 2–3 cm before the line ends, too little to fit a
-    /// direction to, and the line was lost (`tvd_lambda_survey` in `learn/tests/fidelity.rs`).
+    /// at the least ([`lead`]: 0.06 m by default). The line is fitted from that far before the
+    /// detected region, within its segment. The thesis starts the fit at the region's start; a
+    /// teacher who slows down at the end of a short line is detected only a few centimetres
+    /// before the line ends, too little to fit a direction to, and the line was lost
+    /// (`tvd_lambda_survey` in `learn/tests/fidelity.rs`).
     pub lead: f64,
     /// λ of the TV denoising of the fitting error (metres × frames): 0.002.
     ///
@@ -131,8 +131,8 @@ impl OklParams {
     pub fn for_calibration(calibration: &Calibration) -> Self {
         OklParams {
             filter_distance: calibration.filter_distance,
-            overshoot: calibration.filter_distance * calibration.switch_points() as f64,
-            lead: calibration.filter_distance * calibration.switch_points() as f64,
+            overshoot: overshoot(calibration),
+            lead: lead(calibration),
             tvd_lambda: 0.002,
             epsilon: 0.001,
             combine_distance: 0.01,
@@ -149,6 +149,23 @@ impl OklParams {
             epsilon: self.epsilon,
         }
     }
+}
+
+/// How far a detection runs on past the end of its line with `calibration`: the window and the
+/// errors the tank needs to switch back off, one filter step each (5 cm with the shipped
+/// calibration).
+pub fn overshoot(calibration: &Calibration) -> f64 {
+    calibration.filter_distance * f64::from(calibration.window + calibration.switch_points())
+}
+
+/// How far the hand has moved along a line, at the least, when `calibration`'s detector switches
+/// on: the first straight error needs its whole window on the line ([`Sampling::span`]), each
+/// further one a filter step, less one step for where the filter's steps fall on the line.
+///
+/// [`Sampling::span`]: crate::calibration::Sampling::span
+pub fn lead(calibration: &Calibration) -> f64 {
+    let steps = 2 * calibration.window + calibration.switch_points();
+    calibration.filter_distance * f64::from(steps.saturating_sub(2))
 }
 
 /// Learns a spec from `demo` with OKL. `world` (the task's world, when known) supplies shapes

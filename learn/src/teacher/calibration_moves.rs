@@ -88,7 +88,7 @@ fn record(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibration::Calibration;
+    use crate::calibration::{Calibration, Motion};
 
     fn positions(demo: &Demo) -> Vec<Vector3<f64>> {
         demo.ee.iter().map(|p| p.translation.vector).collect()
@@ -121,11 +121,11 @@ mod tests {
         let share = |right: usize, all: usize| right as f64 / all as f64;
         for profile in [TeacherProfile::careful(), TeacherProfile::novice()] {
             let (line, circle) = calibration_demos(&profile, 0).unwrap();
-            let fit = Calibration::fit(&positions(&line), &positions(&circle)).unwrap();
+            let fit = Calibration::fit(&Motion::of(&line), &Motion::of(&circle)).unwrap();
             let (mut right, mut all) = (0, 0);
             for seed in 1..=10 {
                 let (line, circle) = calibration_demos(&profile, seed).unwrap();
-                let s = fit.separation(&positions(&line), &positions(&circle));
+                let s = fit.separation(&Motion::of(&line), &Motion::of(&circle));
                 assert!(
                     share(s.line_right, s.line_points) >= 0.9,
                     "seed {seed}: {s:?}"
@@ -144,7 +144,7 @@ mod tests {
     #[test]
     fn the_shipped_calibration_is_the_default_teachers_fit_rounded() {
         let (line, circle) = calibration_demos(&TeacherProfile::careful(), 0).unwrap();
-        let fit = Calibration::fit(&positions(&line), &positions(&circle)).unwrap();
+        let fit = Calibration::fit(&Motion::of(&line), &Motion::of(&circle)).unwrap();
         let shipped = Calibration::default();
         assert!((fit.beta0 - shipped.beta0).abs() <= 0.5, "{fit:?}");
         assert!((fit.beta1 / shipped.beta1 - 1.0).abs() <= 0.1, "{fit:?}");
