@@ -176,7 +176,7 @@ fn a_driver_streams_frames_on_stdin() {
             "--teacher",
             "stdin",
             "--answers",
-            "yes,yes,yes",
+            "yes",
             "-o",
             "live.mcap",
             "--json",

@@ -73,18 +73,81 @@ impl Question {
     }
 }
 
+/// A question an answer list was asked, as its errors list it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Asked {
+    /// Demonstration time of the question (s).
+    pub t: f64,
+    /// Where the hand was (world, m).
+    pub position: Vector3<f64>,
+    /// The answer the list gave, if it had one.
+    pub answer: Option<Answer>,
+}
+
+/// The questions an answer list was asked, one line each: time, position and answer.
+fn list_questions(asked: &[Asked]) -> String {
+    if asked.is_empty() {
+        return "no question was asked".into();
+    }
+    let lines: Vec<String> = asked
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let answer = q.answer.map_or("no answer", answer_word);
+            format!(
+                "  question {} at t = {:.2} s, hand at ({:.2}, {:.2}, {:.2}) m: {answer}",
+                i + 1,
+                q.t,
+                q.position.x,
+                q.position.y,
+                q.position.z
+            )
+        })
+        .collect();
+    format!("the questions:\n{}", lines.join("\n"))
+}
+
+/// The word `--answers` takes for an answer.
+fn answer_word(answer: Answer) -> &'static str {
+    match answer {
+        Answer::Yes => "yes",
+        Answer::No => "no",
+        Answer::Unknown => "unknown",
+    }
+}
+
 /// Why an answer could not be had.
 #[derive(Debug, Error, PartialEq)]
 pub enum DialogueError {
-    /// A list of answers was shorter than the number of queries.
-    #[error("query {query} at t = {t:.2} s has no answer: --answers lists only {given}")]
-    OutOfAnswers {
-        /// 1-based query number.
-        query: usize,
-        /// Its time.
-        t: f64,
-        /// How many answers were given.
-        given: usize,
+    /// A question had no answer in the list: the list is too short, or (keyed by time) has
+    /// none near the question's time. Later questions depend on this answer, so they are not
+    /// known yet.
+    #[error(
+        "question {} at t = {:.2} s has no answer in --answers ({}); {}",
+        asked.len(),
+        asked.last().map_or(0.0, |q| q.t),
+        given,
+        list_questions(asked)
+    )]
+    Unanswered {
+        /// The questions asked so far, the unanswered one last.
+        asked: Vec<Asked>,
+        /// What the list holds, as given.
+        given: String,
+    },
+    /// A list held answers no question took.
+    #[error(
+        "--answers gives {} answers but {} questions were asked (unused: {}); {}",
+        asked.len() + unused.len(),
+        asked.len(),
+        unused.join(", "),
+        list_questions(asked)
+    )]
+    UnusedAnswers {
+        /// The questions asked, with their answers.
+        asked: Vec<Asked>,
+        /// The answers no question took, as given.
+        unused: Vec<String>,
     },
     /// The terminal could not be used.
     #[error("cannot ask on the terminal: {0}")]
@@ -109,6 +172,12 @@ pub trait AnswerSource {
     /// the teacher intended in the frames recorded since the last call: per frame, whether a
     /// required line was under way. Other sources ignore it.
     fn intend(&mut self, _required: &[bool]) {}
+
+    /// The session ended: a source given its answers in advance ([`ListedAnswers`]) says if
+    /// some were never asked for, so that answers meant for other questions never go unnoticed.
+    fn finish(&self) -> Result<(), DialogueError> {
+        Ok(())
+    }
 }
 
 /// Parses one answer word: `yes`/`y`, `no`/`n`, `unknown`/`u`/`?`/`dont-know`.
@@ -121,45 +190,144 @@ pub fn parse_answer(word: &str) -> Option<Answer> {
     }
 }
 
-/// Answers given in advance, in order (`--answers yes,no,unknown`).
+/// How far (s) a question's time may be from the time an answer is keyed by and still take it:
+/// half a second. The detector asks about a line within a fraction of a second of when the
+/// hand has made enough of it, so a list written from one run's questions (which `akl teach`
+/// prints and records) fits a replay of the same recording, while questions a second apart
+/// are not confused.
+pub const ANSWER_TIME_TOLERANCE: f64 = 0.5;
+
+/// Answers given in advance (`--answers`): in order (`yes,no,unknown`), or keyed by the time of
+/// the question each answers (`9.9:yes,19.0:no`, each taken by the question nearest its time
+/// within [`ANSWER_TIME_TOLERANCE`]). Every question must find an answer and every answer a
+/// question ([`AnswerSource::finish`]); the errors list the questions asked with their times
+/// and positions.
 #[derive(Debug, Clone)]
 pub struct ListedAnswers {
-    answers: Vec<Answer>,
-    next: usize,
+    /// Each answer with its time key (all keyed or none) and whether a question took it.
+    answers: Vec<(Option<f64>, Answer, bool)>,
+    given: String,
+    asked: Vec<Asked>,
 }
 
 impl ListedAnswers {
-    /// Parses a comma-separated list; the error names the bad word.
+    /// Parses a comma-separated list of answers, all of them plain or all keyed by time
+    /// (`TIME:ANSWER`); the error names the bad item.
     pub fn parse(list: &str) -> Result<Self, DialogueError> {
+        let parse_item = |item: &str| -> Result<(Option<f64>, Answer), DialogueError> {
+            let (time, word) = match item.split_once(':') {
+                Some((time, word)) => {
+                    let t = time
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|t| t.is_finite() && *t >= 0.0)
+                        .ok_or_else(|| {
+                            DialogueError::Parse(format!(
+                                "`{}`: `{}` is not a time in seconds",
+                                item.trim(),
+                                time.trim()
+                            ))
+                        })?;
+                    (Some(t), word)
+                }
+                None => (None, item),
+            };
+            let answer = parse_answer(word).ok_or_else(|| {
+                DialogueError::Parse(format!(
+                    "`{}` is not an answer (use yes, no or unknown, or TIME:ANSWER)",
+                    word.trim()
+                ))
+            })?;
+            Ok((time, answer))
+        };
         let answers = list
             .split(',')
             .filter(|w| !w.trim().is_empty())
-            .map(|w| {
-                parse_answer(w).ok_or_else(|| {
-                    DialogueError::Parse(format!(
-                        "`{}` is not an answer (use yes, no or unknown)",
-                        w.trim()
-                    ))
-                })
-            })
+            .map(parse_item)
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(ListedAnswers { answers, next: 0 })
+        let keyed = answers.iter().filter(|(t, _)| t.is_some()).count();
+        if keyed != 0 && keyed != answers.len() {
+            return Err(DialogueError::Parse(
+                "key every answer by time (9.9:yes,19.0:no) or none (yes,no)".into(),
+            ));
+        }
+        Ok(ListedAnswers {
+            answers: answers.into_iter().map(|(t, a)| (t, a, false)).collect(),
+            given: list.trim().to_string(),
+            asked: Vec::new(),
+        })
+    }
+
+    /// Answers keyed by the times of the questions they answer (such as a recording's, which
+    /// `given` names in errors).
+    pub fn keyed(answers: &[(f64, Answer)], given: &str) -> Self {
+        ListedAnswers {
+            answers: answers.iter().map(|(t, a)| (Some(*t), *a, false)).collect(),
+            given: given.to_string(),
+            asked: Vec::new(),
+        }
+    }
+
+    /// The questions asked so far, with the answers they took.
+    pub fn asked(&self) -> &[Asked] {
+        &self.asked
+    }
+
+    /// The answer `question` takes: the next in order, or the nearest unused one in time.
+    fn take(&mut self, question: &Question) -> Option<Answer> {
+        let index = if self.answers.first().is_some_and(|(t, _, _)| t.is_some()) {
+            self.answers
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, _, used))| !used)
+                .filter_map(|(i, (t, _, _))| t.map(|t| (i, (t - question.t).abs())))
+                .filter(|(_, gap)| *gap <= ANSWER_TIME_TOLERANCE)
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(i, _)| i)
+        } else {
+            self.answers.iter().position(|(_, _, used)| !used)
+        }?;
+        self.answers[index].2 = true;
+        Some(self.answers[index].1)
     }
 }
 
 impl AnswerSource for ListedAnswers {
     fn answer(&mut self, question: &Question) -> Result<Answer, DialogueError> {
-        let answer = self
+        let answer = self.take(question);
+        self.asked.push(Asked {
+            t: question.t,
+            position: question.line_end,
+            answer,
+        });
+        answer.ok_or_else(|| DialogueError::Unanswered {
+            asked: self.asked.clone(),
+            given: if self.given.is_empty() {
+                "empty".into()
+            } else {
+                format!("`{}`", self.given)
+            },
+        })
+    }
+
+    fn finish(&self) -> Result<(), DialogueError> {
+        let unused: Vec<String> = self
             .answers
-            .get(self.next)
-            .copied()
-            .ok_or(DialogueError::OutOfAnswers {
-                query: self.next + 1,
-                t: question.t,
-                given: self.answers.len(),
-            })?;
-        self.next += 1;
-        Ok(answer)
+            .iter()
+            .filter(|(_, _, used)| !used)
+            .map(|(t, a, _)| match t {
+                Some(t) => format!("{t}:{}", answer_word(*a)),
+                None => answer_word(*a).to_string(),
+            })
+            .collect();
+        if unused.is_empty() {
+            return Ok(());
+        }
+        Err(DialogueError::UnusedAnswers {
+            asked: self.asked.clone(),
+            unused,
+        })
     }
 }
 
@@ -308,17 +476,64 @@ mod tests {
         }
     }
 
+    fn at(t: f64) -> Question {
+        Question { t, ..question(1) }
+    }
+
     #[test]
     fn listed_answers_run_out_with_a_clear_error() {
         let mut list = ListedAnswers::parse("yes, n").unwrap();
-        assert_eq!(list.answer(&question(1)), Ok(Answer::Yes));
-        assert_eq!(list.answer(&question(2)), Ok(Answer::No));
-        let err = list.answer(&question(3)).unwrap_err().to_string();
-        assert!(err.contains("query 3") && err.contains("only 2"), "{err}");
+        assert_eq!(list.answer(&at(1.0)), Ok(Answer::Yes));
+        assert_eq!(list.answer(&at(2.0)), Ok(Answer::No));
+        assert_eq!(list.finish(), Ok(()));
+        let err = list.answer(&at(3.5)).unwrap_err().to_string();
+        assert!(
+            err.contains("question 3 at t = 3.50 s has no answer")
+                && err.contains("question 1 at t = 1.00 s, hand at (0.50, 0.00, 0.30) m: yes")
+                && err.contains("question 2 at t = 2.00 s")
+                && err.contains("`yes, n`"),
+            "{err}"
+        );
         assert!(ListedAnswers::parse("yes,maybe")
             .unwrap_err()
             .to_string()
             .contains("`maybe`"));
+    }
+
+    #[test]
+    fn answers_left_over_are_an_error_naming_the_questions() {
+        let mut list = ListedAnswers::parse("yes,no").unwrap();
+        assert_eq!(list.answer(&at(9.9)), Ok(Answer::Yes));
+        let err = list.finish().unwrap_err().to_string();
+        assert!(
+            err.contains("gives 2 answers but 1 questions")
+                && err.contains("unused: no")
+                && err.contains("question 1 at t = 9.90 s"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn answers_keyed_by_time_go_to_the_question_nearest_their_time() {
+        let mut list = ListedAnswers::parse("19.0:no, 9.9:yes").unwrap();
+        assert_eq!(list.answer(&at(10.1)), Ok(Answer::Yes));
+        assert_eq!(list.answer(&at(18.8)), Ok(Answer::No));
+        assert_eq!(list.finish(), Ok(()));
+        // A question with no answer near it is refused, naming it, and so is an answer left.
+        let mut list = ListedAnswers::parse("9.9:yes,19.0:no").unwrap();
+        let err = list.answer(&at(14.0)).unwrap_err().to_string();
+        assert!(
+            err.contains("question 1 at t = 14.00 s has no answer"),
+            "{err}"
+        );
+        let err = list.finish().unwrap_err().to_string();
+        assert!(err.contains("unused: 9.9:yes, 19:no"), "{err}");
+        for bad in ["9.9:yes,no", "x:yes", "-1:yes"] {
+            assert!(
+                matches!(ListedAnswers::parse(bad), Err(DialogueError::Parse(_))),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

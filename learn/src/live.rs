@@ -217,7 +217,7 @@ mod tests {
     fn teach(text: &str, stop: bool) -> Result<(crate::demo::Demo, LiveEnd), LiveError> {
         let mut stream = LiveStream::new(text.as_bytes());
         let start = stream.start()?;
-        let mut answers = ListedAnswers::parse("yes,yes,yes").unwrap();
+        let mut answers = ListedAnswers::parse("yes").unwrap();
         let mut session = TeachingSession::new(
             start.header.clone(),
             &start.objects,
@@ -225,7 +225,11 @@ mod tests {
             &mut answers,
         );
         let end = stream.run(start, &mut session, &AtomicBool::new(stop))?;
-        Ok((session.finish()?, end))
+        let demo = match end {
+            LiveEnd::Finished => session.finish()?,
+            LiveEnd::Stopped => session.finish_early()?,
+        };
+        Ok((demo, end))
     }
 
     #[test]

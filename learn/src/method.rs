@@ -11,8 +11,8 @@ use crate::baselines::kd::marked_frames;
 use crate::baselines::kd::{learn_kd, KdParams};
 use crate::baselines::macl::{learn_macl, MaclParams};
 use crate::calibration::Calibration;
-use crate::demo::Demo;
-use crate::dialogue::AnswerSource;
+use crate::demo::{Demo, DialogueKind};
+use crate::dialogue::{AnswerSource, ListedAnswers};
 use crate::okl::{self, LearnError, OklParams};
 use crate::session::SessionError;
 use crate::teach::{session_header, stream_demo, Pace};
@@ -120,11 +120,34 @@ pub fn prepare(
     Ok(replayed)
 }
 
+/// The answers `demo` recorded, keyed by the time of the question each answered (an answer with
+/// no query before it by its own time), for replaying the detector over a recording that kept
+/// its dialogue but not the detector's states. `None` when it recorded no answer.
+pub fn recorded_answers(demo: &Demo) -> Option<ListedAnswers> {
+    let mut query = None;
+    let mut answers = Vec::new();
+    for e in &demo.events {
+        match e.kind {
+            DialogueKind::Query => query = Some(e.t),
+            DialogueKind::Answer(a) => answers.push((query.take().unwrap_or(e.t), a)),
+            DialogueKind::Suggestion | DialogueKind::Keyframe => {}
+        }
+    }
+    (!answers.is_empty()).then(|| ListedAnswers::keyed(&answers, "the recording's answers"))
+}
+
+/// `demo` without the online detector's states and its queries, answers and suggestions (its
+/// keyframe marks kept): to be replayed through the detector with other answers.
+pub fn without_dialogue(mut demo: Demo) -> Demo {
+    demo.detector.clear();
+    demo.events.retain(|e| e.kind == DialogueKind::Keyframe);
+    demo
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::demo::{Answer, DialogueKind};
-    use crate::dialogue::ListedAnswers;
+    use crate::demo::Answer;
     use crate::okl::synth::DemoBuilder;
 
     fn inspection_without_detector() -> Demo {
@@ -185,6 +208,32 @@ mod tests {
         let spec = learn_spec(Method::Akl, &ready, None, &LearnOptions::default()).unwrap();
         let lines = spec.line_count();
         assert_eq!(lines, 1);
+    }
+
+    /// A recording that kept its dialogue but not the detector's states is replayed with its
+    /// own answers, which fit the questions the replay asks; other answers replace them.
+    #[test]
+    fn a_recording_is_replayed_with_its_own_answers_unless_given_others() {
+        let demo = inspection_without_detector();
+        let mut yes = ListedAnswers::parse("yes").unwrap();
+        let taught = prepare(Method::Akl, demo, Calibration::default(), &mut yes).unwrap();
+        let mut stripped = taught.clone();
+        stripped.detector.clear();
+        let mut own = recorded_answers(&stripped).unwrap();
+        let again = prepare(Method::Akl, stripped, Calibration::default(), &mut own).unwrap();
+        assert_eq!(again, taught);
+        let bare = without_dialogue(taught.clone());
+        assert!(bare.detector.is_empty() && recorded_answers(&bare).is_none());
+        assert_eq!(marked_frames(&bare), marked_frames(&taught));
+        let mut no = ListedAnswers::parse("no").unwrap();
+        let spec = learn_spec(
+            Method::Akl,
+            &prepare(Method::Akl, bare, Calibration::default(), &mut no).unwrap(),
+            None,
+            &LearnOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(spec.line_count(), 0);
     }
 
     #[test]

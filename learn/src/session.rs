@@ -226,8 +226,17 @@ impl<'a> TeachingSession<'a> {
         near
     }
 
-    /// Ends the session; an empty recording is an error.
+    /// Ends the session; an empty recording is an error, and so are answers given in advance
+    /// that no question took ([`AnswerSource::finish`]).
     pub fn finish(self) -> Result<Demo, SessionError> {
+        self.answers.finish()?;
+        self.finish_early()
+    }
+
+    /// Ends a session stopped before the demonstration ended (Ctrl-C): answers given in advance
+    /// may be left for questions that never came, so they are not checked. An empty recording
+    /// is an error.
+    pub fn finish_early(self) -> Result<Demo, SessionError> {
         if self.demo.is_empty() {
             return Err(SessionError::Frame {
                 frame: 0,

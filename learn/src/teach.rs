@@ -157,7 +157,12 @@ pub fn stream_demo(
         session = session.with_sink(sink);
     }
     let stopped = Player::new(pace).play(&mut session, demo, 0..demo.len(), marks)?;
-    Ok((session.finish()?, stopped))
+    let recorded = if stopped {
+        session.finish_early()?
+    } else {
+        session.finish()?
+    };
+    Ok((recorded, stopped))
 }
 
 /// Why a simulated teacher could not teach.
@@ -237,10 +242,15 @@ pub fn teach_simulated(
     };
     let suggestions = session.suggestions();
     let unintended_line_chance = teacher.unintended_line_chance();
+    let demo = if stopped {
+        session.finish_early()?
+    } else {
+        session.finish()?
+    };
     Ok(SimulatedTeaching {
         unintended_line_chance,
         sim: teacher.finish(),
-        demo: session.finish()?,
+        demo,
         stopped,
         suggestions,
     })

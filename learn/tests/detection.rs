@@ -157,7 +157,7 @@ fn curved_motion_is_asked_about_no_more_than_before() {
 
 /// A task whose one required line is `length` metres long: `descend`, a peg lowered straight
 /// into a fixture after a free reach above it, or `pull`, a handle pulled straight out of a
-/// cabinet right after it is grasped.
+/// cabinet (off the stand it rests on) right after it is grasped.
 fn short_line_task(kind: &str, length: f64) -> Task {
     let table = r#"{"name": "table", "shape": {"type": "box", "size": [1.2, 1.4, 0.04]},
         "pose": {"p": [0.35, 0, -0.02], "q": [0, 0, 0, 1]}, "movable": false, "mass": 0.0, "friction": 0.6}"#;
@@ -179,7 +179,9 @@ fn short_line_task(kind: &str, length: f64) -> Task {
         ),
         _ => (
             r#"{"name": "cabinet", "shape": {"type": "box", "size": [0.3, 0.4, 0.3]},
-                "pose": {"p": [0.75, 0.0, 0.15], "q": [0, 0, 0, 1]}, "movable": false, "mass": 0.0, "friction": 0.6},
+                "pose": {"p": [0.77, 0.0, 0.15], "q": [0, 0, 0, 1]}, "movable": false, "mass": 0.0, "friction": 0.6},
+               {"name": "stand", "shape": {"type": "box", "size": [0.04, 0.12, 0.19]},
+                "pose": {"p": [0.59, 0.0, 0.095], "q": [0, 0, 0, 1]}, "movable": false, "mass": 0.0, "friction": 0.6},
                {"name": "handle", "shape": {"type": "box", "size": [0.02, 0.1, 0.02]},
                 "pose": {"p": [0.59, 0.0, 0.2], "q": [0, 0, 0, 1]}, "movable": true, "mass": 0.05, "friction": 0.6}"#
                 .to_string(),

@@ -5,7 +5,7 @@
 
 use akl_learn::calibration::Calibration;
 use akl_learn::demo::{Answer, Demo, DialogueKind};
-use akl_learn::dialogue::ListedAnswers;
+use akl_learn::dialogue::{AnswerSource, DialogueError, ListedAnswers, Question};
 use akl_learn::okl::synth::DemoBuilder;
 use akl_learn::session::SessionError;
 use akl_learn::teach::{oracle_for, run_session, session_header, stream_demo, Pace};
@@ -19,18 +19,34 @@ const NOISE: f64 = 0.0005;
 
 /// Streams the frames of `builder`'s demonstration through a fresh teaching session (the real
 /// detector asks, `answers` answers in order), dropping the builder's own detector states.
-fn teach(mut builder: DemoBuilder, answers: &str) -> Result<Demo, SessionError> {
+fn teach(builder: DemoBuilder, answers: &str) -> Result<Demo, SessionError> {
+    teach_with(builder, &mut ListedAnswers::parse(answers).unwrap())
+}
+
+/// The teacher says "no" to every question.
+struct AlwaysNo;
+
+impl AnswerSource for AlwaysNo {
+    fn answer(&mut self, _: &Question) -> Result<Answer, DialogueError> {
+        Ok(Answer::No)
+    }
+}
+
+/// [`teach`] with any source of answers.
+fn teach_with(
+    mut builder: DemoBuilder,
+    answers: &mut dyn AnswerSource,
+) -> Result<Demo, SessionError> {
     let mut demo = builder.build();
     demo.detector.clear();
     demo.events.clear();
-    let mut answers = ListedAnswers::parse(answers).unwrap();
     let header = session_header(&demo.header, None);
     let (taught, _) = stream_demo(
         &demo,
         header,
         &[],
         Calibration::default(),
-        &mut answers,
+        answers,
         None,
         &Pace::default(),
     )?;
@@ -314,7 +330,7 @@ fn ball_put_down(release: [f64; 3], crate_at: [f64; 3]) -> Vec<String> {
         .pause(0.3)
         .release()
         .curve([0.35, 0.1, 0.45], 0.2);
-    let spec = akl(&teach(b, "no,no,no,no").unwrap());
+    let spec = akl(&teach_with(b, &mut AlwaysNo).unwrap());
     spec.keyframes.iter().map(|k| k.reference.clone()).collect()
 }
 

@@ -71,7 +71,7 @@ fn an_unintended_line_answered_no_leaves_nothing_and_yes_two_constraint_keyframe
         let demo = run_session(&sim, Calibration::default(), answers, None).unwrap();
         learn(Method::Akl, &demo, &task)
     };
-    let no = answer(&mut ListedAnswers::parse("no,no,no").unwrap());
+    let no = answer(&mut ListedAnswers::parse("no").unwrap());
     assert_eq!(no.keyframes.len(), 4);
     assert_eq!(count(&no, |k, _| k != KeyframeKind::Interaction), 0);
     // Kept, the line is bounded by two keyframes: constraint keyframes, or combined ones where

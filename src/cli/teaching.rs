@@ -56,8 +56,11 @@ pub(crate) enum Teacher {
 #[command(
     after_help = "ANSWERS is `oracle` (a simulated teacher who knows the task's true \
 lines and errs at its profile's rate; --teacher sim only), `all-yes`, `terminal` (asked on \
-/dev/tty: one key, y, n or ?), or a list such as `yes,no,unknown` used in order. Defaults: \
-oracle with --teacher sim, terminal with --teacher stdin.
+/dev/tty: one key, y, n or ?), or a list: `yes,no,unknown` used in order, or keyed by the time \
+of the question each answers, `9.9:yes,19.0:no` (the question within 0.5 s of the time). A list \
+must hold one answer per question: a question without an answer, or an answer left over, stops \
+with exit 2 and lists the questions with their times and hand positions. Defaults: oracle with \
+--teacher sim, terminal with --teacher stdin.
 
 The recording streams into OUTPUT.partial and is renamed to OUTPUT when complete; a killed \
 recording leaves OUTPUT.partial, which `akl learn` reads up to its last second. Ctrl-C ends a \
@@ -99,9 +102,12 @@ pub(crate) struct TeachArgs {
 /// `akl learn`
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "A demonstration recorded without the online detector (e.g. a JSONL file \
-from another driver) is first replayed through it for AKL; its questions are answered by \
---answers (all-yes, terminal or a list such as yes,no)."
+    after_help = "AKL learns from the detector's states and the answers a recording holds. \
+With --answers the detector is replayed over the recording and its questions answered anew \
+(all-yes, terminal, or a list such as yes,no or 9.9:yes,19.0:no, one answer per question). A \
+recording without the detector's states (e.g. a JSONL file from another driver) is replayed \
+with its own recorded answers, keyed by their questions' times, or needs --answers when it has \
+none."
 )]
 pub(crate) struct LearnArgs {
     /// The demonstration (JSONL or MCAP, also a .partial file of a killed recording).
@@ -115,7 +121,7 @@ pub(crate) struct LearnArgs {
     /// Calibration the detector ran with (default: the shipped one).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
-    /// Answers for replaying the detector over a demo recorded without it.
+    /// Answers for replaying the detector over the demo, instead of the recording's own.
     #[arg(long)]
     pub answers: Option<String>,
     /// Half-widths of every learned TSR: metres on x, y, z and radians on roll, pitch, yaw.

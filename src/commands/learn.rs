@@ -4,7 +4,8 @@ use super::{load_calibration, print_json, spec::keyframe_table};
 use crate::answers::answer_source;
 use crate::cli::LearnArgs;
 use crate::exit::{CliError, CliResult};
-use akl_learn::method::needs_replay;
+use akl_learn::dialogue::AnswerSource;
+use akl_learn::method::{needs_replay, recorded_answers, without_dialogue};
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::ros2::{import_ros2, PoseSource, Ros2Topics};
@@ -20,6 +21,8 @@ struct Learned<'a> {
     method: Method,
     frames: usize,
     replayed_detector: bool,
+    /// Whose answers the replay took: `the answers given` or `the recording's answers`.
+    replayed_with: Option<&'static str>,
     runtime_s: f64,
     output: Option<String>,
     spec: &'a TaskSpec,
@@ -39,18 +42,35 @@ pub(super) fn run(args: LearnArgs) -> CliResult {
             .map_err(CliError::internal)?,
     };
     let (calibration, _) = load_calibration(args.calibration.as_deref())?;
-    let replayed = needs_replay(method, &demo);
-    if replayed {
-        let Some(spec) = &args.answers else {
-            return Err(CliError::input(format!(
-                "{}: recorded without the online detector; pass --answers (all-yes, terminal or a list such as yes,no) to replay it",
-                args.demo.display()
-            )));
-        };
-        let mut answers = answer_source(spec, None)?;
-        demo = prepare(method, demo, calibration, answers.as_mut())
-            .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
-    }
+    // Given answers replace the recording's: the detector is replayed with them. Without, a
+    // recording that kept its answers but not the detector's states is replayed with its own.
+    let replayed = match (&args.answers, method) {
+        (Some(spec), Method::Akl) => {
+            demo = without_dialogue(demo);
+            Some((answer_source(spec, None)?, "the answers given"))
+        }
+        _ if needs_replay(method, &demo) => {
+            let recorded = recorded_answers(&demo).ok_or_else(|| {
+                CliError::input(format!(
+                    "{}: recorded without the online detector or any answer; pass --answers (all-yes, terminal or a list such as yes,no) to replay it",
+                    args.demo.display()
+                ))
+            })?;
+            Some((
+                Box::new(recorded) as Box<dyn AnswerSource>,
+                "the recording's answers",
+            ))
+        }
+        _ => None,
+    };
+    let replayed = match replayed {
+        Some((mut answers, with)) => {
+            demo = prepare(method, demo, calibration, answers.as_mut())
+                .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
+            Some(with)
+        }
+        None => None,
+    };
     let mut options = LearnOptions {
         okl: OklParams::for_calibration(&calibration),
         ..LearnOptions::default()
@@ -70,7 +90,8 @@ pub(super) fn run(args: LearnArgs) -> CliResult {
         demo: args.demo.display().to_string(),
         method,
         frames: demo.len(),
-        replayed_detector: replayed,
+        replayed_detector: replayed.is_some(),
+        replayed_with: replayed,
         runtime_s: runtime,
         output: args.output.as_ref().map(|p| p.display().to_string()),
         spec: &spec,
@@ -84,11 +105,9 @@ pub(super) fn run(args: LearnArgs) -> CliResult {
         learned.frames,
         method,
         runtime * 1e3,
-        if replayed {
-            " (after replaying the online detector)"
-        } else {
-            ""
-        }
+        replayed
+            .map(|with| format!(" (after replaying the online detector with {with})"))
+            .unwrap_or_default()
     );
     print!("{}", keyframe_table(&spec).render());
     if let Some(out) = &learned.output {

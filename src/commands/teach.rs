@@ -222,7 +222,11 @@ fn teach_live(
     let end = stream
         .run(start, &mut session, stop)
         .map_err(|e| kept_partial(&partial, format!("standard input: {e}")))?;
-    let demo = session.finish().map_err(|e| kept_partial(&partial, e))?;
+    let demo = match end {
+        LiveEnd::Finished => session.finish(),
+        LiveEnd::Stopped => session.finish_early(),
+    }
+    .map_err(|e| kept_partial(&partial, e))?;
     let path = recording.finish().map_err(CliError::internal)?;
     Ok((demo, path, end == LiveEnd::Stopped, task))
 }
