@@ -14,14 +14,19 @@ pub(crate) struct Progress {
 impl Progress {
     /// A bar titled `label` for `total` trials, shown if standard error is a terminal.
     pub(crate) fn new(label: &str, total: usize) -> Progress {
+        Progress::counting(label, total, "trials")
+    }
+
+    /// A bar titled `label` for `total` items called `unit` (e.g. "problems").
+    pub(crate) fn counting(label: &str, total: usize, unit: &str) -> Progress {
         let target = if std::io::stderr().is_terminal() {
             ProgressDrawTarget::stderr()
         } else {
             ProgressDrawTarget::hidden()
         };
-        let style = ProgressStyle::with_template(
-            "{prefix} [{bar:20}] {pos}/{len} trials, {msg} failed, {elapsed} ({eta} left)",
-        )
+        let style = ProgressStyle::with_template(&format!(
+            "{{prefix}} [{{bar:20}}] {{pos}}/{{len}} {unit}, {{msg}} failed, {{elapsed}} ({{eta}} left)"
+        ))
         .map(|s| s.progress_chars("#>-"))
         .unwrap_or_else(|_| ProgressStyle::default_bar());
         let bar = ProgressBar::with_draw_target(Some(total as u64), target)

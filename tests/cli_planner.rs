@@ -376,3 +376,167 @@ fn a_speed_scale_slows_the_plan_and_the_report_records_it() {
         assert!(stderr(&o).contains("--speed-scale"), "{}", stderr(&o));
     }
 }
+
+/// A problem file of two scenes: an empty one, and one where a wall stands between the start
+/// and a goal (joint 1 turned by 1.2 rad) and across another (turned by 0.6 rad).
+fn bench_problems(dir: &std::path::Path) -> std::path::PathBuf {
+    let start = "[0, -0.785, 0, -2.356, 0, 1.571, 0.785]";
+    let goal = "[1.2, -0.785, 0, -2.356, 0, 1.571, 0.785]";
+    let text = format!(
+        r#"{{"scenes": {{
+              "empty": [],
+              "wall": [{{"name": "wall", "kind": "box", "position": [0.4, 0.2, 0.55],
+                        "quat_xyzw": [0, 0, 0, 1], "euler_xyz": [0, 0, 0],
+                        "half_extents": [0.2, 0.01, 0.35]}},
+                      {{"name": "ball", "kind": "sphere", "position": [-0.6, 0.6, 0.3], "radius": 0.05}},
+                      {{"name": "can", "kind": "cylinder", "position": [0.3, 0.0, 1.2],
+                        "radius": 0.05, "length": 0.2}}]}},
+            "problems": [
+              {{"set": "open", "id": "open/1", "scene": "empty", "start": {start}, "goal": {goal}}},
+              {{"set": "walled", "id": "walled/1", "scene": "wall", "start": {start}, "goal": {goal}}},
+              {{"set": "walled", "id": "walled/2", "scene": "wall", "start": {start},
+                "goal": [0.6, -0.785, 0, -2.356, 0, 1.571, 0.785]}}]}}"#
+    );
+    let path = dir.join("problems.json");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn bench_planning_solves_each_valid_problem_and_writes_the_peer_runner_records() {
+    let dir = scratch("bench-planning");
+    let problems = bench_problems(&dir);
+    let file = problems.to_str().unwrap();
+    let o = akl(&["bench", "planning", file, "--seeds", "2", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = json(&o);
+    let records = v.as_array().unwrap();
+    assert_eq!(records.len(), 3);
+    let fields = |r: &serde_json::Value| {
+        let mut k: Vec<String> = r.as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    assert_eq!(
+        fields(&records[0]),
+        [
+            "goal_in_limits",
+            "goal_valid",
+            "id",
+            "runs",
+            "set",
+            "start_in_limits",
+            "start_valid",
+            "straight_edge_free"
+        ]
+    );
+    assert_eq!(
+        fields(&records[0]["runs"][0]),
+        [
+            "found",
+            "iterations",
+            "length",
+            "seed",
+            "time_ns",
+            "wall_ns",
+            "waypoints"
+        ]
+    );
+    // In the empty scene the straight edge is free and taken at once; the wall blocks it.
+    assert_eq!(records[0]["straight_edge_free"], true);
+    assert_eq!(records[0]["runs"][0]["iterations"], 0);
+    assert_eq!(records[1]["straight_edge_free"], false);
+    for r in &records[..2] {
+        let runs = r["runs"].as_array().unwrap();
+        assert_eq!(runs.len(), 2);
+        assert!(runs.iter().all(|run| run["found"] == true), "{r}");
+    }
+    assert!(records[1]["runs"][0]["iterations"].as_u64().unwrap() > 0);
+    // The second walled goal puts the forearm through the wall: judged, not run.
+    let last = &records[2];
+    assert_eq!(
+        (&last["start_valid"], &last["goal_valid"]),
+        (&true.into(), &false.into())
+    );
+    assert!(last["runs"].as_array().unwrap().is_empty());
+    assert_eq!(last["straight_edge_free"], serde_json::Value::Null);
+    // The text names the sets, and --against compares with a peer's records of the same file.
+    let peer = dir.join("peer.json");
+    std::fs::write(&peer, &o.stdout).unwrap();
+    let o = akl(&[
+        "bench",
+        "planning",
+        file,
+        "--seeds",
+        "1",
+        "--against",
+        peer.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("open") && out.contains("walled") && out.contains("all"),
+        "{out}"
+    );
+    assert!(out.contains("both valid") && out.contains("×"), "{out}");
+    assert!(out.contains("walled/2  goal: fer_link5 with wall"), "{out}");
+    // --set keeps one set.
+    let v = json(&akl(&[
+        "bench", "planning", file, "--seeds", "1", "--set", "open", "--json",
+    ]));
+    assert_eq!(v.as_array().unwrap().len(), 1);
+}
+
+#[test]
+fn bench_planning_refuses_bad_problem_files_naming_the_problem() {
+    let dir = scratch("bench-planning-bad");
+    let problems = bench_problems(&dir);
+    let text = std::fs::read_to_string(&problems).unwrap();
+    let cases = [
+        (
+            text.replace("\"scene\": \"empty\"", "\"scene\": \"nowhere\""),
+            "problem open/1: scene \"nowhere\"",
+        ),
+        (
+            text.replace("\"radius\": 0.05}", "\"radius\": 0}"),
+            "scene wall, obstacle ball: radius 0",
+        ),
+        (
+            text.replace(
+                "\"goal\": [1.2, -0.785, 0, -2.356, 0, 1.571, 0.785]",
+                "\"goal\": [1.2]",
+            ),
+            "goal has 1 joint values",
+        ),
+        (
+            text.replace("\"kind\": \"sphere\"", "\"kind\": \"cone\""),
+            "bad3.json: line",
+        ),
+    ];
+    for (i, (bad, expected)) in cases.iter().enumerate() {
+        let path = dir.join(format!("bad{i}.json"));
+        std::fs::write(&path, bad).unwrap();
+        let o = akl(&["bench", "planning", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(expected),
+            "{} lacks {expected}",
+            stderr(&o)
+        );
+    }
+    let file = problems.to_str().unwrap();
+    for (args, expected) in [
+        (vec!["--seeds", "0"], "--seeds"),
+        (vec!["--set", "nothing"], "--set nothing"),
+        (
+            vec!["--against", "/nonexistent/peer.json"],
+            "peer.json: cannot read",
+        ),
+    ] {
+        let mut all = vec!["bench", "planning", file];
+        all.extend(args);
+        let o = akl(&all);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(expected), "{}", stderr(&o));
+    }
+}

@@ -7,6 +7,7 @@
 //! scene's objects. [`plan_task`] turns a task spec into one timed joint trajectory ([`Plan`]),
 //! the quickest of the whole-spec candidates its budget allows ([`PlanBudget`], `search`).
 
+pub mod benchmark;
 pub mod check;
 pub mod collision;
 pub mod config;

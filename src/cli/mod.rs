@@ -1,10 +1,12 @@
 //! Command-line arguments.
 
+mod bench;
 mod inspect;
 mod shared;
 mod teaching;
 mod verify;
 
+pub(crate) use bench::*;
 pub(crate) use inspect::*;
 pub(crate) use shared::*;
 pub(crate) use teaching::*;
@@ -208,4 +210,7 @@ pub(crate) enum Command {
     /// Exit codes: 0 the study ran; 2 bad input (no participants, --execute 0, an output
     /// folder that is a file); 130 interrupted by SIGINT or SIGTERM; 1 anything else.
     Eval(EvalArgs),
+    /// Measure the planner on shared problem sets, side by side with other planners.
+    #[command(subcommand)]
+    Bench(BenchCommand),
 }

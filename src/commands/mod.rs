@@ -1,5 +1,6 @@
 //! One module per top-level command.
 
+mod bench;
 mod calibrate;
 mod compare;
 mod demo;
@@ -46,6 +47,7 @@ pub(crate) fn run(cli: Cli) -> CliResult {
         Command::Compare(args) => compare::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Eval(args) => eval::run(args),
+        Command::Bench(cmd) => bench::run(cmd),
     }
 }
 
