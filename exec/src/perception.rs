@@ -38,18 +38,6 @@ impl PoseNoise {
         position: 0.0,
         yaw: 0.0,
     };
-
-    /// Checks both deviations are finite and not negative.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [("position", self.position), ("yaw", self.yaw)] {
-            if !v.is_finite() || v < 0.0 {
-                return Err(format!(
-                    "pose noise {name} must be finite and >= 0, got {v}"
-                ));
-            }
-        }
-        Ok(())
-    }
 }
 
 /// The world as perceived in the trial seeded `seed`: `truth` with every movable object's pose
@@ -127,22 +115,5 @@ mod tests {
         for (a, b) in truth.objects.iter().zip(&exact.objects) {
             assert!(position_distance(&a.pose, &b.pose) == 0.0);
         }
-    }
-
-    #[test]
-    fn negative_or_infinite_noise_is_refused() {
-        assert!(PoseNoise {
-            position: -1.0,
-            yaw: 0.0
-        }
-        .validate()
-        .is_err());
-        assert!(PoseNoise {
-            position: 0.0,
-            yaw: f64::NAN
-        }
-        .validate()
-        .is_err());
-        assert!(PoseNoise::default().validate().is_ok());
     }
 }

@@ -121,7 +121,7 @@ pub fn recheck(
                 })
             };
             if let Err(e) = robot.check_joints(&q) {
-                report(e);
+                report(e.to_string());
             }
             if let Some(hit) =
                 checker.check(&q, plan.gripper_width(t), held.as_ref(), &segment.allowed)

@@ -1,5 +1,6 @@
 //! `robot.toml`: what the planner needs to know about a robot beyond its URDF.
 
+use crate::error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 /// The parsed `robot.toml` of a robot folder (see `robots/panda/robot.toml` for the fields).
@@ -86,17 +87,20 @@ pub struct CollisionConfig {
 
 impl RobotConfig {
     /// Parses `robot.toml` text; the error carries the TOML parser's line and column.
-    pub fn from_toml(text: &str) -> Result<Self, String> {
-        toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())
+    pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
+        toml::from_str(text).map_err(|e| ConfigError::Toml(e.to_string().trim_end().to_string()))
     }
 
     /// Checks the numbers the TOML shape cannot express (finite, positive where needed).
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = |name: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let positive = |field: &str, value: f64| {
+            if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{name} must be positive and finite, got {v}"))
+                Err(ConfigError::NotPositive {
+                    field: field.to_string(),
+                    value,
+                })
             }
         };
         for (i, v) in self.velocity_limits.iter().enumerate() {
@@ -106,7 +110,7 @@ impl RobotConfig {
             positive(&format!("acceleration_limits[{i}]"), *v)?;
         }
         if let Some(v) = self.ready.iter().find(|v| !v.is_finite()) {
-            return Err(format!("ready holds a non-finite number ({v})"));
+            return Err(ConfigError::ReadyNotFinite(*v));
         }
         positive("gripper.open_width", self.gripper.open_width)?;
         positive("gripper.speed", self.gripper.speed)?;

@@ -61,6 +61,148 @@ impl MeshFailure {
     }
 }
 
+/// Why a URDF cannot be used; names the joint or link at fault.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UrdfError {
+    /// The file is a xacro template, which must be expanded into a URDF first.
+    #[error("this is a xacro file, not a URDF: expand it first (`xacro robot.urdf.xacro > robot.urdf`, from ROS's xacro package) and name the .urdf in robot.toml")]
+    Xacro,
+    /// The XML is malformed or not a URDF (urdf-rs's message).
+    #[error("{0}")]
+    Xml(String),
+    /// Two links, or two joints, have one name.
+    #[error("two {0} share a name")]
+    DuplicateName(&'static str),
+    /// A joint is of an unsupported type, names an unknown link or has bad numbers.
+    #[error("joint `{joint}`: {problem}")]
+    Joint {
+        /// The joint.
+        joint: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The links do not hang from exactly one root.
+    #[error("links must form one tree with one root; roots found: {}", .0.join(", "))]
+    NotOneTree(Vec<String>),
+    /// The joints close a loop.
+    #[error("the joints form a cycle through link `{0}`")]
+    Cycle(String),
+    /// `robot.toml` names a link or joint the URDF lacks.
+    #[error("{field} `{name}` is not a {kind} of the URDF")]
+    NotInUrdf {
+        /// The `robot.toml` field, e.g. `tcp_link`.
+        field: &'static str,
+        /// The name given.
+        name: String,
+        /// `link` or `joint`.
+        kind: &'static str,
+    },
+    /// No joint between the base and the TCP moves.
+    #[error("no movable joint between the base and `{0}`")]
+    NoArmJoint(String),
+    /// A collision element has a size of zero or less.
+    #[error("link `{link}`: collision geometry {geometry} has a non-positive size")]
+    Geometry {
+        /// The link.
+        link: String,
+        /// The geometry as read.
+        geometry: String,
+    },
+}
+
+/// Why `robot.toml` holds a value the robot cannot have.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The TOML is malformed or lacks a field (the parser's message, with line and column).
+    #[error("{0}")]
+    Toml(String),
+    /// A limit, width, speed or margin is not a positive number.
+    #[error("{field} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The field, e.g. `velocity_limits[2]`.
+        field: String,
+        /// Its value.
+        value: f64,
+    },
+    /// The ready configuration holds NaN or an infinity.
+    #[error("ready holds a non-finite number ({0})")]
+    ReadyNotFinite(f64),
+}
+
+/// Why a joint configuration is not one the arm can take; names the joint.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum JointsError {
+    /// The configuration has the wrong number of values.
+    #[error("expected {} joint values ({}), got {got}", names.len(), names.join(", "))]
+    Count {
+        /// The arm's joints.
+        names: Vec<String>,
+        /// How many values were given.
+        got: usize,
+    },
+    /// A value is NaN or infinite.
+    #[error("joint {} (`{name}`) is not finite", index + 1)]
+    NotFinite {
+        /// Index of the joint (0-based).
+        index: usize,
+        /// Its name.
+        name: String,
+    },
+    /// A value lies outside the joint's limits.
+    #[error("joint {} (`{name}`) = {value} is outside its limits [{lo}, {hi}]", index + 1)]
+    OutsideLimits {
+        /// Index of the joint (0-based).
+        index: usize,
+        /// Its name.
+        name: String,
+        /// The value.
+        value: f64,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+}
+
+/// Why the analytic Panda solver does not fit an arm's kinematics.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PandaIkError {
+    /// The arm does not have seven joints.
+    #[error("the panda solver needs 7 arm joints, this arm has {0}")]
+    JointCount(usize),
+    /// Fewer than seven joints lie between the base and the TCP.
+    #[error("the TCP is not seven joints away from the base")]
+    ShortChain,
+    /// Fixed joints before joint 1 move the base.
+    #[error("the fixed joints before joint 1 (up to `{0}`) move the base; the panda solver needs them to be identities")]
+    MovedBase(String),
+    /// An arm joint differs from the Panda's.
+    #[error("joint `{joint}` (joint {}): {problem}", index + 1)]
+    Joint {
+        /// The joint's name.
+        joint: String,
+        /// Its index in the arm (0-based).
+        index: usize,
+        /// How it differs.
+        problem: String,
+    },
+    /// A length the Panda has as zero is not.
+    #[error("the panda solver needs {name} = 0, found {value}")]
+    NonZero {
+        /// The Denavit–Hartenberg parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A joint between joint 7 and the TCP moves.
+    #[error("joint `{0}` between joint 7 and the TCP is not fixed")]
+    MovingTip(String),
+}
+
 /// Why inverse kinematics found no configuration.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IkError {

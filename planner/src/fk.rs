@@ -2,6 +2,7 @@
 //! link poses cost a few hundred nanoseconds and no allocation (the planner evaluates them
 //! millions of times). Tests check it against k's own forward kinematics.
 
+use crate::error::UrdfError;
 use crate::geometry::{Geometry, LinkShape, ShapeRole};
 use akl_tsr::nalgebra::{Matrix6xX, Translation3, Unit, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
@@ -102,26 +103,31 @@ impl Kinematics {
         tcp_link: &str,
         gripper_joints: &[String],
         mimics: &Mimics,
-    ) -> Result<(Kinematics, ArmJoints), String> {
+    ) -> Result<(Kinematics, ArmJoints), UrdfError> {
         let nodes: Vec<&k::Node<f64>> = chain.iter().collect();
         let mut parents = Vec::with_capacity(nodes.len());
         for node in &nodes {
-            let parent = match node.parent() {
-                Some(p) => Some(
-                    nodes
-                        .iter()
-                        .position(|n| **n == p)
-                        .ok_or("a joint's parent is not in the tree")?,
-                ),
-                None => None,
-            };
+            let parent =
+                match node.parent() {
+                    Some(p) => Some(nodes.iter().position(|n| **n == p).ok_or_else(|| {
+                        UrdfError::Joint {
+                            joint: node.joint().name.clone(),
+                            problem: "its parent is not in the tree".into(),
+                        }
+                    })?),
+                    None => None,
+                };
             parents.push(parent);
         }
         let link_name = |n: &k::Node<f64>| n.link().as_ref().map(|l| l.name.clone());
         let tcp = nodes
             .iter()
             .position(|n| link_name(n).as_deref() == Some(tcp_link))
-            .ok_or_else(|| format!("tcp_link `{tcp_link}` is not a link of the URDF"))?;
+            .ok_or_else(|| UrdfError::NotInUrdf {
+                field: "tcp_link",
+                name: tcp_link.to_string(),
+                kind: "link",
+            })?;
         let mut tcp_path = vec![tcp];
         while let Some(p) = parents[*tcp_path.last().unwrap_or(&0)] {
             tcp_path.push(p);
@@ -129,7 +135,11 @@ impl Kinematics {
         tcp_path.reverse();
         for g in gripper_joints {
             if !nodes.iter().any(|n| n.joint().name == *g) {
-                return Err(format!("gripper joint `{g}` is not a joint of the URDF"));
+                return Err(UrdfError::NotInUrdf {
+                    field: "gripper joint",
+                    name: g.clone(),
+                    kind: "joint",
+                });
             }
         }
         let mut arm = ArmJoints {
@@ -155,9 +165,7 @@ impl Kinematics {
             }
         }
         if arm.names.is_empty() {
-            return Err(format!(
-                "no movable joint between the base and `{tcp_link}`"
-            ));
+            return Err(UrdfError::NoArmJoint(tcp_link.to_string()));
         }
         let finger_scale = 1.0 / gripper_joints.len().max(1) as f64;
         let base_drive = |name: &str, limits: Option<[f64; 2]>| -> Drive {
@@ -212,8 +220,11 @@ impl Kinematics {
                 Some(link) => {
                     let mut shapes = Vec::new();
                     for c in &link.collisions {
-                        let geometry = Geometry::from_k(&c.geometry)
-                            .map_err(|e| format!("link `{}`: {e}", link.name))?;
+                        let geometry =
+                            Geometry::from_k(&c.geometry).ok_or_else(|| UrdfError::Geometry {
+                                link: link.name.clone(),
+                                geometry: format!("{:?}", c.geometry),
+                            })?;
                         if let Some(geometry) = geometry {
                             shapes.push(LinkShape {
                                 geometry,

@@ -92,9 +92,9 @@ pub enum ShapeRole {
 }
 
 impl Geometry {
-    /// Converts a k collision geometry; `None` for a mesh (enclosed by a grown hull instead, see
-    /// [`crate::enclosure`]); non-positive sizes are rejected.
-    pub fn from_k(geometry: &k::link::Geometry<f64>) -> Result<Option<Self>, String> {
+    /// Converts a k collision geometry: `Some(None)` for a mesh (enclosed by a grown hull
+    /// instead, see [`crate::enclosure`]), `None` for a size of zero or less.
+    pub fn from_k(geometry: &k::link::Geometry<f64>) -> Option<Option<Self>> {
         let g = match geometry {
             k::link::Geometry::Capsule { radius, length } => Geometry::Capsule {
                 radius: *radius,
@@ -112,7 +112,7 @@ impl Geometry {
                 length: *length,
             },
             k::link::Geometry::Sphere { radius } => Geometry::Sphere { radius: *radius },
-            k::link::Geometry::Mesh { .. } => return Ok(None),
+            k::link::Geometry::Mesh { .. } => return Some(None),
         };
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let valid = match &g {
@@ -124,10 +124,7 @@ impl Geometry {
             Geometry::Sphere { radius } => positive(*radius),
             Geometry::RoundHull(_) => true,
         };
-        if !valid {
-            return Err(format!("collision geometry {g:?} has a non-positive size"));
-        }
-        Ok(Some(g))
+        valid.then_some(Some(g))
     }
 
     /// Radius of the smallest sphere about the shape's origin that contains it.

@@ -36,7 +36,9 @@ pub mod timing;
 pub mod urdf_load;
 
 pub use config::RobotConfig;
-pub use error::{IkError, PlanError, RobotError};
+pub use error::{
+    ConfigError, IkError, JointsError, PandaIkError, PlanError, RobotError, UrdfError,
+};
 pub use geometry::{Geometry, LinkShape, ShapeRole};
 pub use options::{PlanBudget, PlanOptions};
 pub use plan::{GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind};

@@ -138,6 +138,18 @@ pub struct Plan {
     pub events: Vec<GripperEvent>,
 }
 
+/// Why a plan file cannot be read.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanFileError {
+    /// The text is not JSON of the plan format (serde's message names line and column).
+    #[error("{0}")]
+    Json(#[from] serde_json::Error),
+    /// The `akl_plan` version is not the one this build reads.
+    #[error("unsupported plan version {0} (this build reads akl_plan {PLAN_VERSION})")]
+    Version(u32),
+}
+
 impl Plan {
     /// The segment running at time `t` (clamped to the plan).
     pub fn segment_at(&self, t: f64) -> Option<&Segment> {
@@ -189,13 +201,10 @@ impl Plan {
     }
 
     /// Parses a plan; the error names the line and column.
-    pub fn from_json(text: &str) -> Result<Plan, String> {
-        let plan: Plan = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    pub fn from_json(text: &str) -> Result<Plan, PlanFileError> {
+        let plan: Plan = serde_json::from_str(text)?;
         if plan.akl_plan != PLAN_VERSION {
-            return Err(format!(
-                "unsupported plan version {} (this build reads akl_plan {PLAN_VERSION})",
-                plan.akl_plan
-            ));
+            return Err(PlanFileError::Version(plan.akl_plan));
         }
         Ok(plan)
     }

@@ -3,7 +3,7 @@
 
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
-use crate::error::{IkError, MeshFailure, RobotError};
+use crate::error::{IkError, JointsError, MeshFailure, RobotError};
 use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
 use crate::geometry::LinkShape;
 use crate::ik::{DlsIk, IkSolver, PandaIk};
@@ -145,9 +145,9 @@ impl Robot {
             });
         }
         let toml_text = read(&toml_path)?;
-        let config = RobotConfig::from_toml(&toml_text).map_err(|message| RobotError::Config {
+        let config = RobotConfig::from_toml(&toml_text).map_err(|e| RobotError::Config {
             path: toml_path.clone(),
-            message,
+            message: e.to_string(),
         })?;
         let urdf_path = dir.join(&config.urdf);
         let urdf_text = read(&urdf_path)?;
@@ -183,9 +183,9 @@ impl Robot {
             path: urdf_path.to_path_buf(),
             message,
         };
-        let config = RobotConfig::from_toml(toml_text).map_err(config_err)?;
-        config.validate().map_err(config_err)?;
-        let urdf = urdf_load::parse(urdf_text).map_err(urdf_err)?;
+        let config = RobotConfig::from_toml(toml_text).map_err(|e| config_err(e.to_string()))?;
+        config.validate().map_err(|e| config_err(e.to_string()))?;
+        let urdf = urdf_load::parse(urdf_text).map_err(|e| urdf_err(e.to_string()))?;
         let chain = urdf_load::chain(&urdf);
         let mimics: Mimics = urdf
             .joints
@@ -205,7 +205,7 @@ impl Robot {
             .collect();
         let (mut kin, arm) =
             Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &mimics)
-                .map_err(urdf_err)?;
+                .map_err(|e| urdf_err(e.to_string()))?;
         let robot_dir = toml_path.parent().unwrap_or(Path::new(""));
         let files = MeshFiles::new(
             robot_dir,
@@ -447,29 +447,28 @@ impl Robot {
 
     /// Checks a configuration: right length, finite, within the limits; the error names the
     /// joint.
-    pub fn check_joints(&self, q: &[f64]) -> Result<(), String> {
+    pub fn check_joints(&self, q: &[f64]) -> Result<(), JointsError> {
         if q.len() != self.dof() {
-            return Err(format!(
-                "expected {} joint values ({}), got {}",
-                self.dof(),
-                self.joint_names().join(", "),
-                q.len()
-            ));
+            return Err(JointsError::Count {
+                names: self.joint_names().to_vec(),
+                got: q.len(),
+            });
         }
         for (i, (v, [lo, hi])) in q.iter().zip(self.joint_limits()).enumerate() {
             if !v.is_finite() {
-                return Err(format!(
-                    "joint {} (`{}`) is not finite",
-                    i + 1,
-                    self.arm.names[i]
-                ));
+                return Err(JointsError::NotFinite {
+                    index: i,
+                    name: self.arm.names[i].clone(),
+                });
             }
             if v < lo || v > hi {
-                return Err(format!(
-                    "joint {} (`{}`) = {v} is outside its limits [{lo}, {hi}]",
-                    i + 1,
-                    self.arm.names[i]
-                ));
+                return Err(JointsError::OutsideLimits {
+                    index: i,
+                    name: self.arm.names[i].clone(),
+                    value: *v,
+                    lo: *lo,
+                    hi: *hi,
+                });
             }
         }
         Ok(())

@@ -1,17 +1,15 @@
 //! Reading a URDF (urdf-rs) and building its kinematic tree (k), after checking the things k
 //! would otherwise panic on or silently drop.
 
+use crate::error::UrdfError;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Parses URDF text and checks that it is a single tree of supported joints.
-pub fn parse(text: &str) -> Result<urdf_rs::Robot, String> {
+pub fn parse(text: &str) -> Result<urdf_rs::Robot, UrdfError> {
     if text.contains("xmlns:xacro") || text.contains("<xacro:") {
-        return Err(
-            "this is a xacro file, not a URDF: expand it first (`xacro robot.urdf.xacro > robot.urdf`, from ROS's xacro package) and name the .urdf in robot.toml"
-                .into(),
-        );
+        return Err(UrdfError::Xacro);
     }
-    let robot = urdf_rs::read_from_string(text).map_err(|e| e.to_string())?;
+    let robot = urdf_rs::read_from_string(text).map_err(|e| UrdfError::Xml(e.to_string()))?;
     validate(&robot)?;
     Ok(robot)
 }
@@ -23,18 +21,21 @@ pub fn chain(robot: &urdf_rs::Robot) -> k::Chain<f64> {
 
 /// Checks that links and joints form one tree, joint types are supported, mimic targets exist
 /// and numbers are finite; the error names the joint or link at fault.
-pub fn validate(robot: &urdf_rs::Robot) -> Result<(), String> {
+pub fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
     let links: BTreeSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     if links.len() != robot.links.len() {
-        return Err("two links share a name".into());
+        return Err(UrdfError::DuplicateName("links"));
     }
     let joints: BTreeSet<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
     if joints.len() != robot.joints.len() {
-        return Err("two joints share a name".into());
+        return Err(UrdfError::DuplicateName("joints"));
     }
     let mut parent_of: BTreeMap<&str, &str> = BTreeMap::new();
     for j in &robot.joints {
-        let at = |problem: String| format!("joint `{}`: {problem}", j.name);
+        let at = |problem: String| UrdfError::Joint {
+            joint: j.name.clone(),
+            problem,
+        };
         for link in [&j.parent.link, &j.child.link] {
             if !links.contains(link.as_str()) {
                 return Err(at(format!("unknown link `{link}`")));
@@ -87,9 +88,8 @@ pub fn validate(robot: &urdf_rs::Robot) -> Result<(), String> {
         .filter(|l| !parent_of.contains_key(l))
         .collect();
     if roots.len() != 1 {
-        return Err(format!(
-            "links must form one tree with one root; roots found: {}",
-            roots.join(", ")
+        return Err(UrdfError::NotOneTree(
+            roots.iter().map(|r| r.to_string()).collect(),
         ));
     }
     // Every link reaches the root without revisiting a link (no cycles).
@@ -98,7 +98,7 @@ pub fn validate(robot: &urdf_rs::Robot) -> Result<(), String> {
         let mut link = *start;
         while let Some(parent) = parent_of.get(link) {
             if !seen.insert(link) {
-                return Err(format!("the joints form a cycle through link `{link}`"));
+                return Err(UrdfError::Cycle(link.to_string()));
             }
             link = parent;
         }
@@ -124,14 +124,16 @@ mod tests {
 
     #[test]
     fn unknown_links_and_mimics_are_named() {
-        let e =
-            parse(&TWO_LINKS.replace(r#"<child link="b"/>"#, r#"<child link="c"/>"#)).unwrap_err();
+        let e = parse(&TWO_LINKS.replace(r#"<child link="b"/>"#, r#"<child link="c"/>"#))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("unknown link `c`"), "{e}");
         let e = parse(&TWO_LINKS.replace(
             "<axis",
             r#"<mimic joint="nope" multiplier="1" offset="0"/><axis"#,
         ))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("mimics unknown joint `nope`"), "{e}");
     }
 
@@ -139,24 +141,29 @@ mod tests {
     fn xacro_is_named_and_a_fixed_joint_may_have_no_axis() {
         let xacro = r#"<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">
             <xacro:include filename="arm.xacro"/></robot>"#;
-        let e = parse(xacro).unwrap_err();
+        assert_eq!(parse(xacro).unwrap_err(), UrdfError::Xacro);
+        let e = UrdfError::Xacro.to_string();
         assert!(e.contains("xacro file") && e.contains("expand it"), "{e}");
         let fixed = TWO_LINKS
             .replace("revolute", "fixed")
             .replace(r#"<axis xyz="0 0 1"/>"#, r#"<axis xyz="0 0 0"/>"#);
         assert!(parse(&fixed).is_ok());
         let e = parse(&TWO_LINKS.replace(r#"<axis xyz="0 0 1"/>"#, r#"<axis xyz="0 0 0"/>"#))
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("axis has zero length"), "{e}");
     }
 
     #[test]
     fn floating_joints_and_forests_are_rejected() {
-        let e = parse(&TWO_LINKS.replace("revolute", "floating")).unwrap_err();
+        let e = parse(&TWO_LINKS.replace("revolute", "floating"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("not supported"), "{e}");
         let e =
             parse(&TWO_LINKS.replace(r#"<link name="b"/>"#, r#"<link name="b"/><link name="c"/>"#))
-                .unwrap_err();
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("one root"), "{e}");
     }
 }

@@ -58,6 +58,26 @@ pub enum SceneError {
     },
 }
 
+/// Why a shape has no size the checks can use.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ShapeError {
+    /// A size that must be a positive length is not.
+    #[error("{what} must be a positive finite length, got {value}")]
+    NotPositive {
+        /// Which size (`size x`, `radius`, ...).
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A capsule's straight part has a negative or non-finite length.
+    #[error("length must be a finite length >= 0, got {0}")]
+    NegativeLength(f64),
+    /// A mesh shape whose file has not been read (it is read when its task file is loaded).
+    #[error("mesh `{0}` was not read: a task with mesh shapes is loaded from its file, which the mesh's path is relative to")]
+    MeshNotRead(String),
+}
+
 impl SceneError {
     /// Converts a serde_json error on `text`, keeping its line and column.
     pub fn from_json(err: &serde_json::Error, text: &str) -> Self {

@@ -44,7 +44,7 @@ pub fn load_obstacles(path: &Path) -> Result<World, FileError<SceneError>> {
             return Err(at("another object has this name".into()));
         }
         o.shape.resolve(folder).map_err(|e| at(e.to_string()))?;
-        o.shape.validate().map_err(at)?;
+        o.shape.validate().map_err(|e| at(e.to_string()))?;
     }
     Ok(World {
         robot_base: akl_tsr::Pose::identity(),

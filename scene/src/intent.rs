@@ -4,6 +4,7 @@
 //! discover the keyframes from the recorded motion. Poses are tool-centre-point (TCP) poses with
 //! the gripper's z axis pointing out of the fingers.
 
+use crate::error::SceneError;
 use akl_tsr::pose::serde_pose;
 use akl_tsr::Pose;
 use serde::{Deserialize, Serialize};
@@ -90,7 +91,7 @@ impl Teaching {
     ///
     /// A release's pose follows from the support, the place and the grasp that picked the held
     /// object up; the error names a step that refers to an object the world lacks.
-    pub fn targets(&self, world: &crate::World) -> Result<Vec<Pose>, String> {
+    pub fn targets(&self, world: &crate::World) -> Result<Vec<Pose>, SceneError> {
         let frame = |name: &str| -> Result<Pose, String> {
             if name == akl_tsr::WORLD_FRAME {
                 return Ok(Pose::identity());
@@ -103,7 +104,7 @@ impl Teaching {
         let mut grasp: Option<Pose> = None;
         let mut targets = Vec::with_capacity(self.steps.len());
         for (i, step) in self.steps.iter().enumerate() {
-            let at = |e: String| format!("teaching.steps[{i}]: {e}");
+            let at = |problem: String| SceneError::invalid(format!("teaching.steps[{i}]"), problem);
             let target = match step {
                 TeachStep::Grasp { object, tcp } => {
                     grasp = Some(*tcp);

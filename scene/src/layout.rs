@@ -141,7 +141,10 @@ pub fn check_layout(task: &Task, world: &World) -> Result<(), Infeasible> {
             });
         }
     }
-    let targets = task.teaching.targets(world).map_err(Infeasible::Teaching)?;
+    let targets = task
+        .teaching
+        .targets(world)
+        .map_err(|e| Infeasible::Teaching(e.to_string()))?;
     let base_inverse = world.robot_base.inverse();
     let shoulder = Vector3::from(task.reach.shoulder);
     for (step, target) in targets.iter().enumerate() {

@@ -27,7 +27,7 @@ pub mod shape;
 pub mod task;
 pub mod world;
 
-pub use error::SceneError;
+pub use error::{SceneError, ShapeError};
 pub use file::truth_path_for;
 pub use goal::{Goal, GoalCheck};
 pub use intent::{TeachStep, Teaching};

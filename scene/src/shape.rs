@@ -1,5 +1,6 @@
 //! Object shapes: primitives, and convex objects given as a mesh file.
 
+use crate::error::ShapeError;
 use akl_mesh::ConvexHull;
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
@@ -182,8 +183,8 @@ impl Shape {
     }
 
     /// Checks that every size is finite and positive; the error names the bad value.
-    pub fn validate(&self) -> Result<(), String> {
-        let values: Vec<(&str, f64)> = match *self {
+    pub fn validate(&self) -> Result<(), ShapeError> {
+        let values: Vec<(&'static str, f64)> = match *self {
             Shape::Box { size } => vec![
                 ("size x", size[0]),
                 ("size y", size[1]),
@@ -192,23 +193,21 @@ impl Shape {
             Shape::Cylinder { radius, length } => vec![("radius", radius), ("length", length)],
             Shape::Capsule { radius, length } => {
                 if !length.is_finite() || length < 0.0 {
-                    return Err(format!("length must be a finite length >= 0, got {length}"));
+                    return Err(ShapeError::NegativeLength(length));
                 }
                 vec![("radius", radius)]
             }
             Shape::Sphere { radius } => vec![("radius", radius)],
             Shape::Mesh { ref file, ref hull } => {
                 if hull.is_none() {
-                    return Err(format!(
-                        "mesh `{file}` was not read: a task with mesh shapes is loaded from its file, which the mesh's path is relative to"
-                    ));
+                    return Err(ShapeError::MeshNotRead(file.clone()));
                 }
                 Vec::new()
             }
         };
-        for (name, v) in values {
-            if !v.is_finite() || v <= 0.0 {
-                return Err(format!("{name} must be a positive finite length, got {v}"));
+        for (what, value) in values {
+            if !value.is_finite() || value <= 0.0 {
+                return Err(ShapeError::NotPositive { what, value });
             }
         }
         Ok(())
@@ -368,7 +367,7 @@ mod tests {
             file: "part.stl".into(),
             hull: None,
         };
-        let e = unread.validate().unwrap_err();
+        let e = unread.validate().unwrap_err().to_string();
         assert!(
             e.contains("part.stl") && e.contains("loaded from its file"),
             "{e}"
@@ -388,6 +387,7 @@ mod tests {
         }
         .validate()
         .unwrap_err()
+        .to_string()
         .contains("size y"));
     }
 }

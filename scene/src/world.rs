@@ -114,7 +114,9 @@ impl World {
             if !seen.insert(o.name.as_str()) {
                 return Err((at("name"), "is used by more than one object".into()));
             }
-            o.shape.validate().map_err(|p| (at("shape"), p))?;
+            o.shape
+                .validate()
+                .map_err(|p| (at("shape"), p.to_string()))?;
             if !o.mass.is_finite() || o.mass < 0.0 || (o.movable && o.mass == 0.0) {
                 return Err((
                     at("mass"),

@@ -54,6 +54,49 @@ fn known_objects(known: &[String]) -> String {
     }
 }
 
+/// Why a serialized pose is not a pose.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PoseError {
+    /// A position or quaternion component is NaN or infinite.
+    #[error("pose holds a non-finite number ({0})")]
+    NotFinite(f64),
+    /// The quaternion is too far from unit length to be a rounded rotation.
+    #[error("quaternion [{}, {}, {}, {}] is not unit length (norm {norm:.6})", q[0], q[1], q[2], q[3])]
+    NotUnit {
+        /// The quaternion as written, `[x, y, z, w]`.
+        q: [f64; 4],
+        /// Its length.
+        norm: f64,
+    },
+}
+
+/// Why the bounds of a TSR are not a region.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BoundsError {
+    /// A bound is NaN or infinite.
+    #[error("bound on {coordinate} is not finite ([{lo}, {hi}])")]
+    NotFinite {
+        /// The coordinate (`x` ... `yaw`).
+        coordinate: &'static str,
+        /// Its lower bound.
+        lo: f64,
+        /// Its upper bound.
+        hi: f64,
+    },
+    /// A lower bound exceeds its upper bound.
+    #[error("bound on {coordinate} has min {lo} > max {hi}")]
+    Unordered {
+        /// The coordinate (`x` ... `yaw`).
+        coordinate: &'static str,
+        /// Its lower bound.
+        lo: f64,
+        /// Its upper bound.
+        hi: f64,
+    },
+}
+
 /// An error tied to the file it came from; displays as `path: error`.
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {source}", path.display())]

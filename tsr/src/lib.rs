@@ -16,7 +16,7 @@ pub mod rpy;
 pub mod spec;
 pub mod tsr;
 
-pub use error::{FileError, SpecError};
+pub use error::{BoundsError, FileError, PoseError, SpecError};
 pub use keyframe::{Constraint, Gripper, Keyframe, KeyframeKind};
 pub use pose::{Pose, PoseJson};
 pub use spec::{TaskSpec, SPEC_VERSION, WORLD_FRAME};

@@ -1,5 +1,6 @@
 //! Rigid poses and their JSON form `{"p": [x, y, z], "q": [x, y, z, w]}`.
 
+use crate::error::PoseError;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
@@ -24,16 +25,14 @@ pub struct PoseJson {
 
 impl PoseJson {
     /// Converts to a pose, rejecting non-finite numbers and quaternions that are not unit length.
-    pub fn to_pose(&self) -> Result<Pose, String> {
+    pub fn to_pose(&self) -> Result<Pose, PoseError> {
         if let Some(v) = self.p.iter().chain(self.q.iter()).find(|v| !v.is_finite()) {
-            return Err(format!("pose holds a non-finite number ({v})"));
+            return Err(PoseError::NotFinite(*v));
         }
         let [x, y, z, w] = self.q;
         let norm = (x * x + y * y + z * z + w * w).sqrt();
         if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-            return Err(format!(
-                "quaternion [{x}, {y}, {z}, {w}] is not unit length (norm {norm:.6})"
-            ));
+            return Err(PoseError::NotUnit { q: self.q, norm });
         }
         let rotation = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
         Ok(Isometry3::from_parts(
@@ -119,7 +118,8 @@ mod tests {
             q: [0.0, 0.0, 0.0, 1.2],
         };
         let err = json.to_pose().unwrap_err();
-        assert!(err.contains("not unit length"), "{err}");
+        assert!(matches!(err, PoseError::NotUnit { .. }));
+        assert!(err.to_string().contains("not unit length"), "{err}");
     }
 
     #[test]
@@ -138,6 +138,6 @@ mod tests {
             p: [f64::NAN, 0.0, 0.0],
             q: [0.0, 0.0, 0.0, 1.0],
         };
-        assert!(json.to_pose().unwrap_err().contains("non-finite"));
+        assert!(matches!(json.to_pose(), Err(PoseError::NotFinite(v)) if v.is_nan()));
     }
 }

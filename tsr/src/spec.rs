@@ -115,7 +115,10 @@ impl TaskSpec {
             if kf.reference.trim().is_empty() {
                 return Err(invalid(at("reference"), "is empty".into()));
             }
-            kf.tsr.bw.validate().map_err(|p| invalid(at("tsr.bw"), p))?;
+            kf.tsr
+                .bw
+                .validate()
+                .map_err(|p| invalid(at("tsr.bw"), p.to_string()))?;
             for (name, pose) in [("tsr.t0_w", &kf.tsr.t0_w), ("tsr.tw_e", &kf.tsr.tw_e)] {
                 if !pose_is_finite(pose) {
                     return Err(invalid(at(name), "holds a non-finite number".into()));

@@ -4,6 +4,7 @@
 //! `c = (x, y, z, roll, pitch, yaw)` inside the bounds `bw`, where `Tw(c)` is expressed in the
 //! frame w whose world pose is `t0_w`, and `tw_e` is the end-effector offset from that frame.
 
+use crate::error::BoundsError;
 use crate::pose::{serde_pose, Pose};
 use crate::rpy::{folded_rpy, rotation_from_rpy, rpy_from_rotation, wrap_angle};
 use nalgebra::{Isometry3, Translation3};
@@ -45,13 +46,13 @@ impl Bounds {
     }
 
     /// Checks that every bound is finite and ordered; the error names the coordinate.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, [lo, hi]) in COORDINATE_NAMES.iter().zip(self.0) {
+    pub fn validate(&self) -> Result<(), BoundsError> {
+        for (&coordinate, [lo, hi]) in COORDINATE_NAMES.iter().zip(self.0) {
             if !lo.is_finite() || !hi.is_finite() {
-                return Err(format!("bound on {name} is not finite ([{lo}, {hi}])"));
+                return Err(BoundsError::NotFinite { coordinate, lo, hi });
             }
             if lo > hi {
-                return Err(format!("bound on {name} has min {lo} > max {hi}"));
+                return Err(BoundsError::Unordered { coordinate, lo, hi });
             }
         }
         Ok(())
@@ -386,8 +387,15 @@ mod tests {
     fn bounds_validation_names_the_coordinate() {
         let mut b = Bounds::symmetric(0.01, 0.1);
         b.0[4] = [0.2, -0.2];
-        assert!(b.validate().unwrap_err().contains("pitch"));
+        assert_eq!(
+            b.validate(),
+            Err(BoundsError::Unordered {
+                coordinate: "pitch",
+                lo: 0.2,
+                hi: -0.2
+            })
+        );
         b.0[4] = [f64::NAN, 0.0];
-        assert!(b.validate().unwrap_err().contains("not finite"));
+        assert!(b.validate().unwrap_err().to_string().contains("not finite"));
     }
 }

@@ -13,7 +13,7 @@ pub fn route_steps(lattice: &Lattice, task: &Task, start: u32) -> Result<usize, 
     let targets = task
         .teaching
         .targets(&task.world)
-        .map_err(FlexibilityError::Workspace)?;
+        .map_err(|e| FlexibilityError::Workspace(e.to_string()))?;
     let mut stops = vec![start];
     for (i, pose) in targets.iter().enumerate() {
         let cell = lattice.cell_at(&pose.translation.vector).ok_or_else(|| {

@@ -11,6 +11,7 @@
 //! Lengths come from the URDF: [`PandaIk::from_kinematics`] checks that the arm has the
 //! Panda's modified-DH structure and reads d1, d3, a4, a5, d5 and a7 from the joint origins.
 
+use crate::error::PandaIkError;
 use crate::fk::{Drive, Kinematics, Motion};
 use akl_tsr::nalgebra::{Matrix3, Rotation3, Vector3};
 use akl_tsr::Pose;
@@ -74,12 +75,9 @@ impl PandaIk {
     /// Reads the Panda's lengths from compiled kinematics, checking the structure: seven
     /// revolute joints about z directly after one another from the base, with the Panda's
     /// twists and zero offsets where the Panda has them, and only fixed joints to the TCP.
-    pub fn from_kinematics(kin: &Kinematics, limits: &[[f64; 2]]) -> Result<Self, String> {
+    pub fn from_kinematics(kin: &Kinematics, limits: &[[f64; 2]]) -> Result<Self, PandaIkError> {
         if kin.dof() != DOF || limits.len() != DOF {
-            return Err(format!(
-                "the panda solver needs 7 arm joints, this arm has {}",
-                kin.dof()
-            ));
+            return Err(PandaIkError::JointCount(kin.dof()));
         }
         let links = kin.links();
         let tcp = kin.tcp_index();
@@ -97,18 +95,19 @@ impl PandaIk {
         }
         // path: base, joint 1 .. joint 7, then fixed links to the TCP.
         if path.len() < 1 + DOF {
-            return Err("the TCP is not seven joints away from the base".into());
+            return Err(PandaIkError::ShortChain);
         }
         if base.translation.vector.norm() > 1e-12 || base.rotation.angle() > 1e-12 {
-            return Err(format!(
-                "the fixed joints before joint 1 (up to `{}`) move the base; the panda solver needs them to be identities",
-                links[path[0]].joint
-            ));
+            return Err(PandaIkError::MovedBase(links[path[0]].joint.clone()));
         }
         let mut ad = [(0.0, 0.0); DOF];
         for (k, &i) in path[1..=DOF].iter().enumerate() {
             let link = &links[i];
-            let at = |e: String| format!("joint `{}` (joint {}): {e}", link.joint, k + 1);
+            let at = |problem: String| PandaIkError::Joint {
+                joint: link.joint.clone(),
+                index: k,
+                problem,
+            };
             match link.motion {
                 Motion::Revolute {
                     axis,
@@ -136,16 +135,13 @@ impl PandaIk {
             ("d6", ad[5].1),
             ("d7", ad[6].1),
         ];
-        if let Some((name, v)) = zero.iter().find(|(_, v)| v.abs() > 1e-9) {
-            return Err(format!("the panda solver needs {name} = 0, found {v}"));
+        if let Some(&(name, value)) = zero.iter().find(|(_, v)| v.abs() > 1e-9) {
+            return Err(PandaIkError::NonZero { name, value });
         }
         let mut tcp_in_7 = Pose::identity();
         for &i in &path[1 + DOF..] {
             if links[i].motion != Motion::Fixed {
-                return Err(format!(
-                    "joint `{}` between joint 7 and the TCP is not fixed",
-                    links[i].joint
-                ));
+                return Err(PandaIkError::MovingTip(links[i].joint.clone()));
             }
             tcp_in_7 *= links[i].origin;
         }
@@ -582,6 +578,8 @@ mod tests {
                 ),
             ))
             .unwrap_err();
+            assert_eq!(e, PandaIkError::MovedBase("fer_base_joint".into()));
+            let e = e.to_string();
             assert!(
                 e.contains("move the base") && e.contains("fer_base_joint"),
                 "{e}"

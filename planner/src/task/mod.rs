@@ -249,7 +249,9 @@ impl<'a> Planner<'a> {
     }
 
     fn check_start(&self) -> Result<(), PlanError> {
-        self.robot.check_joints(&self.q).map_err(PlanError::Start)?;
+        self.robot
+            .check_joints(&self.q)
+            .map_err(|e| PlanError::Start(e.to_string()))?;
         let scene = self.scene();
         let checker = Checker::new(self.robot, &self.model, &scene);
         match checker.check(&self.q, self.width, None, &Allowances::default()) {
