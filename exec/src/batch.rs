@@ -8,8 +8,10 @@
 //! way finish, and the report covers the trials that finished, in trial order.
 
 use crate::error::ExecError;
+use crate::interrupt::Interrupt;
 use crate::options::{ExecOptions, Setup};
-use crate::report::{BatchReport, Settings, TrialReport};
+use crate::report::{BatchReport, Identity, Settings, TrialOutcome, TrialReport};
+use crate::shard::Shard;
 use crate::timeline::Timeline;
 use crate::trace::{write_trace, TraceInput, TRACE_RATE};
 use crate::trial::{run_trial, trial_world};
@@ -39,6 +41,12 @@ pub struct BatchOptions {
 pub struct Batch<'a> {
     setup: Setup<'a>,
     options: BatchOptions,
+    /// The shard of the run this batch is, if it is one.
+    shard: Option<Shard>,
+    /// The indices of the trials this batch runs (all of the run's, a shard's block, or
+    /// those a resumed run still lacks), in order.
+    indices: Vec<usize>,
+    /// The world of each of them.
     worlds: Vec<World>,
 }
 
@@ -51,7 +59,37 @@ impl<'a> Batch<'a> {
         exec: &'a ExecOptions,
         options: BatchOptions,
     ) -> Result<Batch<'a>, ExecError> {
-        if options.trials == 0 {
+        let setup = Setup {
+            robot,
+            task,
+            spec,
+            options: exec,
+        };
+        Batch::only(setup, options, None, (0..options.trials).collect())
+    }
+
+    /// The batch of shard `shard` of the run `options` describes: only the trials of its
+    /// block ([`Shard::trials`]), each with the seed, layout and outcome it has in the whole
+    /// run. Refused when the block is empty.
+    pub fn shard(
+        setup: Setup<'a>,
+        options: BatchOptions,
+        shard: Shard,
+    ) -> Result<Batch<'a>, ExecError> {
+        let block = shard.nonempty_trials(options.trials)?;
+        Batch::only(setup, options, Some(shard), block.collect())
+    }
+
+    /// The batch of the trials `indices` (each below `options.trials`, in increasing order)
+    /// of the run `options` describes (of its shard `shard`, if given): what a resumed run
+    /// still has to run.
+    pub fn only(
+        setup: Setup<'a>,
+        options: BatchOptions,
+        shard: Option<Shard>,
+        indices: Vec<usize>,
+    ) -> Result<Batch<'a>, ExecError> {
+        if options.trials == 0 || indices.is_empty() {
             return Err(ExecError::Options(
                 "a batch needs at least one trial".into(),
             ));
@@ -59,13 +97,27 @@ impl<'a> Batch<'a> {
         if options.jobs == 0 {
             return Err(ExecError::Options("a batch needs at least one job".into()));
         }
+        if indices.windows(2).any(|w| w[0] >= w[1]) || indices.iter().any(|&i| i >= options.trials)
+        {
+            return Err(ExecError::Options(format!(
+                "the trials of a batch must be distinct, in order and below {}",
+                options.trials
+            )));
+        }
+        let Setup {
+            task,
+            spec,
+            options: exec,
+            ..
+        } = setup;
         spec.validate()?;
         spec.check_references(task.world.names())?;
         exec.plan
             .check()
             .map_err(|e| ExecError::Options(e.to_string()))?;
-        let worlds = (0..options.trials)
-            .map(|i| {
+        let worlds = indices
+            .iter()
+            .map(|&i| {
                 trial_world(
                     task,
                     options.randomize,
@@ -75,21 +127,19 @@ impl<'a> Batch<'a> {
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Batch {
-            setup: Setup {
-                robot,
-                task,
-                spec,
-                options: exec,
-            },
+            setup,
             options,
+            shard,
+            indices,
             worlds,
         })
     }
 
-    /// Runs every trial on [`BatchOptions::jobs`] threads, calling `progress` after each
-    /// (from the worker that ran it). Once [`ExecOptions::interrupt`] is raised no more trials
-    /// start: the report then holds the trials that finished (in trial order, each the same as
-    /// in an uninterrupted run) and is [`BatchReport::interrupted`] if any trial did not run.
+    /// Runs every trial of the batch on [`BatchOptions::jobs`] threads, calling `progress`
+    /// after each (from the worker that ran it). Once [`ExecOptions::interrupt`] is raised no
+    /// more trials start: the report then holds the trials that finished (in trial order, each
+    /// the same as in an uninterrupted run) and is [`BatchReport::interrupted`] if any trial
+    /// did not run.
     pub fn run(&self, progress: &(dyn Fn(&TrialReport) + Sync)) -> Result<BatchReport, ExecError> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(self.options.jobs)
@@ -100,39 +150,49 @@ impl<'a> Batch<'a> {
         let started = Instant::now();
         let interrupt = self.setup.options.interrupt;
         let reports: Vec<TrialReport> = pool.install(|| {
-            (0..self.options.trials)
+            (0..self.indices.len())
                 .into_par_iter()
-                .filter_map(|i| {
+                .filter_map(|k| {
                     if interrupt.raised() {
                         return None;
                     }
-                    let r = self.trial(i, None);
+                    let r = self.trial(k, None);
                     progress(&r);
                     Some(r)
                 })
                 .collect()
         });
-        let interrupted = reports.len() < self.options.trials;
+        let interrupted = reports.len() < self.indices.len();
+        let Setup {
+            robot,
+            task,
+            spec,
+            options,
+        } = self.setup;
         let mut report = BatchReport::new(
-            &self.setup.task.name,
-            &self.setup.spec.method,
+            &task.name,
+            &spec.method,
             self.options.seed,
             self.options.randomize,
             reports,
             self.options.jobs,
             started.elapsed().as_secs_f64(),
-            settings(self.setup.robot, self.setup.options, self.setup.spec),
+            settings(robot, options, spec),
         );
         report.interrupted = interrupted;
+        report.shard = self.shard;
+        report.identity = Some(identity(&self.setup, self.options.trials));
         Ok(report)
     }
 
-    /// Runs trial `i` alone (it gives the same report as in the batch), recording its frames
-    /// at `rate` per simulated second for a trace.
-    pub fn record(&self, i: usize, rate: f64) -> (TrialReport, Timeline) {
+    /// Runs trial `i` of the run alone (it gives the same report as in the batch), recording
+    /// its frames at `rate` per simulated second for a trace. Refused when trial `i` is not
+    /// one of this batch's.
+    pub fn record(&self, i: usize, rate: f64) -> Result<(TrialReport, Timeline), ExecError> {
+        let k = self.position(i)?;
         let mut timeline = Timeline::new(rate);
-        let report = self.trial(i, Some(&mut timeline));
-        (report, timeline)
+        let report = self.trial(k, Some(&mut timeline));
+        Ok((report, timeline))
     }
 
     /// Runs again trial `trial` of this batch, or the trial of `report` (this batch's report)
@@ -144,13 +204,11 @@ impl<'a> Batch<'a> {
         trial: Option<usize>,
         path: &Path,
     ) -> Result<usize, ExecError> {
-        let i = trial
-            .unwrap_or_else(|| trial_to_trace(report))
-            .min(self.worlds.len() - 1);
-        let (trial, timeline) = self.record(i, TRACE_RATE);
+        let i = trial.unwrap_or_else(|| trial_to_trace(report).unwrap_or(self.indices[0]));
+        let (trial, timeline) = self.record(i, TRACE_RATE)?;
         let input = TraceInput {
             robot: self.setup.robot,
-            world: &self.worlds[i],
+            world: &self.worlds[self.position(i)?],
             spec: self.setup.spec,
             report: &trial,
             timeline: &timeline,
@@ -159,19 +217,65 @@ impl<'a> Batch<'a> {
         Ok(i)
     }
 
-    fn trial(&self, i: usize, timeline: Option<&mut Timeline>) -> TrialReport {
-        let seed = trial_seed(self.options.seed, i);
-        run_trial(&self.setup, i, seed, &self.worlds[i], timeline)
+    /// Where trial `i` of the run is in this batch.
+    fn position(&self, i: usize) -> Result<usize, ExecError> {
+        self.indices.binary_search(&i).map_err(|_| {
+            let (first, last) = (self.indices[0], self.indices[self.indices.len() - 1]);
+            ExecError::Options(format!(
+                "trial {i} is not one of this batch's (trials {first} to {last})"
+            ))
+        })
     }
 
-    /// The world trial `i` runs in.
+    fn trial(&self, k: usize, timeline: Option<&mut Timeline>) -> TrialReport {
+        let i = self.indices[k];
+        let seed = trial_seed(self.options.seed, i);
+        run_trial(&self.setup, i, seed, &self.worlds[k], timeline)
+    }
+
+    /// The world trial `i` of the run runs in, if it is one of this batch's.
     pub fn world(&self, i: usize) -> Option<&World> {
-        self.worlds.get(i)
+        self.position(i).ok().map(|k| &self.worlds[k])
+    }
+
+    /// The indices of the trials this batch runs, in order.
+    pub fn indices(&self) -> &[usize] {
+        &self.indices
     }
 
     /// The robot, task, spec and settings.
     pub fn setup(&self) -> &Setup<'a> {
         &self.setup
+    }
+}
+
+/// What makes reports of `setup` in a run of `trials` trials comparable ([`Identity`]).
+pub fn identity(setup: &Setup, trials: usize) -> Identity {
+    let Setup {
+        robot,
+        task,
+        spec,
+        options,
+    } = *setup;
+    let mut robot_text = format!("{:?}\n{:?}\n", robot.config(), robot.urdf());
+    for m in robot.meshes() {
+        robot_text.push_str(&format!(
+            "{} {:?} {} {:?} {:?}\n",
+            m.link, m.role, m.uri, m.mesh.vertices, m.mesh.triangles
+        ));
+    }
+    // The interrupt flag changes which trials run, never what one gives.
+    let settings = ExecOptions {
+        interrupt: Interrupt::NEVER,
+        ..options.clone()
+    };
+    Identity {
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        spec_hash: spec_hash(spec),
+        task_hash: sha256(&format!("{task:?}")),
+        robot_hash: sha256(&robot_text),
+        settings_hash: sha256(&format!("{settings:?}")),
+        trials,
     }
 }
 
@@ -206,7 +310,11 @@ pub fn settings(robot: &Robot, options: &ExecOptions, spec: &TaskSpec) -> Settin
 /// SHA-256 (hex) of the spec's canonical JSON: the same spec gives the same hash whatever its
 /// file's layout.
 pub fn spec_hash(spec: &TaskSpec) -> String {
-    let text = spec.to_json();
+    sha256(&spec.to_json())
+}
+
+/// SHA-256 of `text`, hex.
+fn sha256(text: &str) -> String {
     Sha256::digest(text.as_bytes())
         .iter()
         .map(|b| format!("{b:02x}"))
@@ -218,13 +326,15 @@ pub fn trial_seed(seed: u64, i: usize) -> u64 {
     seed.wrapping_add(i as u64)
 }
 
-/// The trial a trace should show: the first that failed, else the first.
-pub fn trial_to_trace(report: &BatchReport) -> usize {
+/// The trial a trace should show: the first that failed, else the first (`None` when the
+/// report holds no trial).
+pub fn trial_to_trace<T: TrialOutcome>(report: &BatchReport<T>) -> Option<usize> {
     report
         .reports
         .iter()
-        .find(|r| !r.passed)
-        .map_or(0, |r| r.trial)
+        .find(|r| !r.passed())
+        .or(report.reports.first())
+        .map(TrialOutcome::index)
 }
 
 #[cfg(test)]
@@ -262,7 +372,7 @@ mod tests {
         assert_eq!(a.passed, 3, "{:?}", a.reports[0].failures);
         for (x, y) in a.reports.into_iter().zip(b.reports) {
             assert_eq!(strip(x.clone()), strip(y));
-            let (again, timeline) = one.record(x.trial, 30.0);
+            let (again, timeline) = one.record(x.trial, 30.0).unwrap();
             assert_eq!(strip(again), strip(x));
             assert!(timeline.frames.len() > 30 && timeline.plan.is_some());
         }

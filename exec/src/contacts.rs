@@ -24,11 +24,11 @@ use akl_planner::contact_rules::{self, LinkRole};
 use akl_planner::Robot;
 use akl_scene::World;
 use rapier3d::prelude::ColliderHandle;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
 /// How deep and how hard contacts may be.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ContactLimits {
     /// Deepest penetration of an allowed contact (metres).
     pub max_depth: f64,

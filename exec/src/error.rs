@@ -19,6 +19,9 @@ pub enum ExecError {
     /// The task's objects could not be placed within their randomization ranges.
     #[error("task: {0}")]
     Scene(#[from] akl_scene::SceneError),
+    /// The shard asked for cannot run (more shards than trials).
+    #[error("{0}")]
+    Shard(#[from] crate::shard::ShardError),
     /// An option is out of range.
     #[error("{0}")]
     Options(String),

@@ -2,10 +2,11 @@
 //! both serializable to `report.json`.
 
 use crate::contacts::{Collision, ContactLimits, Extreme};
+use crate::shard::Shard;
 use akl_scene::GoalCheck;
 use akl_stats::{GateVerdict, PassRate};
 use akl_tsr::PoseJson;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::Path;
@@ -14,7 +15,7 @@ use std::path::Path;
 pub const REPORT_VERSION: u32 = 1;
 
 /// The stage of a trial a failure belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Stage {
     /// The planner could not produce a plan on the perceived world.
@@ -24,7 +25,7 @@ pub enum Stage {
 }
 
 /// Why a trial failed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Cause {
     /// Planning: a keyframe's TSR has no pose the arm can reach.
@@ -252,7 +253,7 @@ pub struct ReleaseCheck {
 }
 
 /// How closely the simulated TCP followed the planned one.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Tracking {
     /// Largest distance (metres).
     pub max: f64,
@@ -333,7 +334,7 @@ impl TrialReport {
 }
 
 /// The settings a batch ran with, so that a report says what it measured against.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Settings {
     /// Version of the execution engine (the `akl-exec` crate).
     pub version: String,
@@ -379,9 +380,200 @@ pub struct Settings {
     pub speed_scale: f64,
 }
 
-/// The outcome of a batch of trials of one spec on one task.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct BatchReport {
+/// What a batch's totals are computed from, and what its summary and JUnit output show of a
+/// trial: implemented by the [`TrialReport`] a run makes and by the [`StoredTrial`] read back
+/// from a report file, so a merged or resumed report is summed up as a run's.
+pub trait TrialOutcome {
+    /// Index of the trial in its run.
+    fn index(&self) -> usize;
+    /// Its seed.
+    fn seed(&self) -> u64;
+    /// Whether every check held.
+    fn passed(&self) -> bool;
+    /// Its failures in the order they occurred (the first is the root cause): cause and detail.
+    fn failure_list(&self) -> Vec<(Cause, &str)>;
+    /// The largest line deviation of the trial, if it has lines (metres).
+    fn line_deviation(&self) -> Option<f64>;
+    /// Wall-clock seconds spent planning and simulating.
+    fn seconds(&self) -> (f64, f64);
+    /// Largest tracking error, deepest contact (metres) and largest contact force (N).
+    fn extremes(&self) -> [f64; 3];
+}
+
+impl TrialOutcome for TrialReport {
+    fn index(&self) -> usize {
+        self.trial
+    }
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+    fn passed(&self) -> bool {
+        self.passed
+    }
+    fn failure_list(&self) -> Vec<(Cause, &str)> {
+        self.failures
+            .iter()
+            .map(|f| (f.cause, f.detail.as_str()))
+            .collect()
+    }
+    fn line_deviation(&self) -> Option<f64> {
+        self.worst_line_deviation()
+    }
+    fn seconds(&self) -> (f64, f64) {
+        (self.plan_seconds, self.sim_seconds)
+    }
+    fn extremes(&self) -> [f64; 3] {
+        [
+            self.tracking.max,
+            self.deepest_contact.value,
+            self.largest_force.value,
+        ]
+    }
+}
+
+/// The parts of a trial's report a summary reads, as stored in `report.json`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+struct StoredSummary {
+    trial: usize,
+    seed: u64,
+    passed: bool,
+    failures: Vec<StoredFailure>,
+    lines: Vec<StoredLine>,
+    plan_seconds: f64,
+    sim_seconds: f64,
+    tracking: Tracking,
+    deepest_contact: StoredValue,
+    largest_force: StoredValue,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+struct StoredFailure {
+    cause: Cause,
+    detail: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+struct StoredLine {
+    deviation: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+struct StoredValue {
+    value: f64,
+}
+
+/// A trial's report read back from a report file: its JSON kept as written (so a merged
+/// report holds each trial exactly as its shard wrote it), with what summaries need parsed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredTrial {
+    json: serde_json::Value,
+    summary: StoredSummary,
+}
+
+impl StoredTrial {
+    /// The trial's report as JSON.
+    pub fn json(&self) -> &serde_json::Value {
+        &self.json
+    }
+
+    /// A trial's report as JSON, read back.
+    pub fn from_json(json: serde_json::Value) -> serde_json::Result<StoredTrial> {
+        let summary = serde_json::from_value(json.clone())?;
+        Ok(StoredTrial { json, summary })
+    }
+
+    /// A trial just run, as a report file will hold it.
+    pub fn from_report(report: &TrialReport) -> serde_json::Result<StoredTrial> {
+        StoredTrial::from_json(serde_json::to_value(report)?)
+    }
+}
+
+impl Serialize for StoredTrial {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.json.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for StoredTrial {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<StoredTrial, D::Error> {
+        let json = serde_json::Value::deserialize(d)?;
+        StoredTrial::from_json(json).map_err(serde::de::Error::custom)
+    }
+}
+
+impl TrialOutcome for StoredTrial {
+    fn index(&self) -> usize {
+        self.summary.trial
+    }
+    fn seed(&self) -> u64 {
+        self.summary.seed
+    }
+    fn passed(&self) -> bool {
+        self.summary.passed
+    }
+    fn failure_list(&self) -> Vec<(Cause, &str)> {
+        self.summary
+            .failures
+            .iter()
+            .map(|f| (f.cause, f.detail.as_str()))
+            .collect()
+    }
+    fn line_deviation(&self) -> Option<f64> {
+        self.summary
+            .lines
+            .iter()
+            .map(|l| l.deviation)
+            .reduce(f64::max)
+    }
+    fn seconds(&self) -> (f64, f64) {
+        (self.summary.plan_seconds, self.summary.sim_seconds)
+    }
+    fn extremes(&self) -> [f64; 3] {
+        [
+            self.summary.tracking.max,
+            self.summary.deepest_contact.value,
+            self.summary.largest_force.value,
+        ]
+    }
+}
+
+/// What makes the reports of two runs (or of the shards of one) parts of the same run: the
+/// same engine, spec, task, robot and settings, and the same number of trials asked for.
+/// Hashes are SHA-256, hex.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Identity {
+    /// Version of the execution engine (the `akl-exec` crate).
+    pub version: String,
+    /// The spec's canonical JSON.
+    pub spec_hash: String,
+    /// The task's canonical JSON: its world, goals and randomization ranges.
+    pub task_hash: String,
+    /// The robot: its `robot.toml` settings, URDF and every mesh's triangles.
+    pub robot_hash: String,
+    /// Every execution setting (simulation, servos, grasp and contact limits, perception
+    /// noise, planner settings including where goals are drawn and the budget).
+    pub settings_hash: String,
+    /// Trials the whole run asks for (all shards together).
+    pub trials: usize,
+}
+
+/// One part a merged report was joined from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MergedPart {
+    /// The part's file.
+    pub file: String,
+    /// Its shard.
+    pub shard: Option<Shard>,
+    /// Worker threads it used.
+    pub jobs: usize,
+    /// Its wall-clock seconds.
+    pub wall_seconds: f64,
+}
+
+/// The outcome of a batch of trials of one spec on one task: [`TrialReport`]s as a run makes
+/// them, or [`StoredTrial`]s as a merged or resumed report holds them (both serialize alike).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BatchReport<T = TrialReport> {
     /// Format version; always [`REPORT_VERSION`].
     pub akl_report: u32,
     /// The task executed.
@@ -392,18 +584,25 @@ pub struct BatchReport {
     pub seed: u64,
     /// Whether objects were moved within the task's ranges.
     pub randomized: bool,
-    /// Number of trials run (fewer than asked when interrupted).
+    /// Number of trials run (fewer than asked when interrupted; a shard's own).
     pub trials: usize,
     /// Number that passed.
     pub passed: usize,
     /// The pass rate with its 95 % confidence interval (exact, Clopper–Pearson).
     pub pass_rate: PassRate,
     /// The deployment gate that judged these trials, when a gate did (`akl validate`).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gate: Option<GateVerdict>,
     /// Whether the batch was stopped (Ctrl-C) before every trial asked for had started: the
     /// report covers only the trials that finished.
     pub interrupted: bool,
+    /// The shard of the run these trials are (`akl execute --shard`); absent for a whole run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// What makes this report comparable with others of the same run (checked by
+    /// [`crate::merge`] and `--resume`); absent in reports of older builds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identity: Option<Identity>,
     /// For each cause, how many failed trials it was the root cause of (see [`rank`]); these
     /// add up to the failed trials.
     pub failures: BTreeMap<Cause, usize>,
@@ -417,44 +616,56 @@ pub struct BatchReport {
     pub plan_seconds_per_trial: f64,
     /// Mean wall-clock seconds of simulation per trial.
     pub sim_seconds_per_trial: f64,
-    /// Wall-clock seconds for the whole batch.
+    /// Wall-clock seconds for the whole batch (of a merged report: its longest part's).
     pub wall_seconds: f64,
-    /// Worker threads used.
+    /// Worker threads used (of a merged report: the most a part used).
     pub jobs: usize,
+    /// The parts a merged report was joined from (`akl report merge`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged: Option<Vec<MergedPart>>,
     /// What the trials measured against.
     pub settings: Settings,
     /// Every trial run, in order.
-    pub reports: Vec<TrialReport>,
+    pub reports: Vec<T>,
 }
 
-impl BatchReport {
+impl<T: TrialOutcome> BatchReport<T> {
     /// Summarizes `reports` (in trial order) run on `jobs` threads in `wall_seconds` with
-    /// `settings`; not interrupted (the caller sets [`BatchReport::interrupted`] when it was).
+    /// `settings`; not interrupted, not a shard, no identity (the caller sets those).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         task: &str,
         method: &str,
         seed: u64,
         randomized: bool,
-        reports: Vec<TrialReport>,
+        reports: Vec<T>,
         jobs: usize,
         wall_seconds: f64,
         settings: Settings,
-    ) -> BatchReport {
-        let passed = reports.iter().filter(|r| r.passed).count();
+    ) -> BatchReport<T> {
+        let passed = reports.iter().filter(|r| r.passed()).count();
         let mut failures: BTreeMap<Cause, usize> = BTreeMap::new();
         let mut secondary: BTreeMap<Cause, usize> = BTreeMap::new();
         for r in &reports {
-            if let Some(root) = r.root() {
-                *failures.entry(root.cause).or_default() += 1;
-            }
-            for c in r.secondary_causes() {
+            let causes = r.failure_list();
+            let Some(&(root, _)) = causes.first() else {
+                continue;
+            };
+            *failures.entry(root).or_default() += 1;
+            let mut others: Vec<Cause> = causes
+                .iter()
+                .map(|(c, _)| *c)
+                .filter(|c| *c != root)
+                .collect();
+            others.sort();
+            others.dedup();
+            for c in others {
                 *secondary.entry(c).or_default() += 1;
             }
         }
         let n = reports.len().max(1) as f64;
-        let plan: f64 = reports.iter().map(|r| r.plan_seconds).sum();
-        let sim: f64 = reports.iter().map(|r| r.sim_seconds).sum();
+        let plan: f64 = reports.iter().map(|r| r.seconds().0).sum();
+        let sim: f64 = reports.iter().map(|r| r.seconds().1).sum();
         BatchReport {
             akl_report: REPORT_VERSION,
             task: task.to_string(),
@@ -466,17 +677,20 @@ impl BatchReport {
             pass_rate: PassRate::new(passed, reports.len()),
             gate: None,
             interrupted: false,
+            shard: None,
+            identity: None,
             failures,
             secondary,
             worst_line_deviation: reports
                 .iter()
-                .filter_map(TrialReport::worst_line_deviation)
+                .filter_map(TrialOutcome::line_deviation)
                 .reduce(f64::max),
             seconds_per_trial: (plan + sim) / n,
             plan_seconds_per_trial: plan / n,
             sim_seconds_per_trial: sim / n,
             wall_seconds,
             jobs,
+            merged: None,
             settings,
             reports,
         }
@@ -486,7 +700,9 @@ impl BatchReport {
     pub fn all_passed(&self) -> bool {
         self.passed == self.trials
     }
+}
 
+impl<T: Serialize> BatchReport<T> {
     /// The report as readable JSON.
     pub fn to_json(&self) -> serde_json::Result<String> {
         akl_tsr::io::to_readable_json(self)
@@ -496,6 +712,42 @@ impl BatchReport {
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
         let text = self.to_json().map_err(std::io::Error::other)?;
         akl_tsr::io::write_atomic(path, text.as_bytes())
+    }
+}
+
+impl BatchReport<TrialReport> {
+    /// The same report with its trials as a report file holds them.
+    pub fn stored(&self) -> serde_json::Result<BatchReport<StoredTrial>> {
+        let reports = self
+            .reports
+            .iter()
+            .map(StoredTrial::from_report)
+            .collect::<serde_json::Result<Vec<_>>>()?;
+        Ok(BatchReport {
+            akl_report: self.akl_report,
+            task: self.task.clone(),
+            method: self.method.clone(),
+            seed: self.seed,
+            randomized: self.randomized,
+            trials: self.trials,
+            passed: self.passed,
+            pass_rate: self.pass_rate,
+            gate: self.gate,
+            interrupted: self.interrupted,
+            shard: self.shard,
+            identity: self.identity.clone(),
+            failures: self.failures.clone(),
+            secondary: self.secondary.clone(),
+            worst_line_deviation: self.worst_line_deviation,
+            seconds_per_trial: self.seconds_per_trial,
+            plan_seconds_per_trial: self.plan_seconds_per_trial,
+            sim_seconds_per_trial: self.sim_seconds_per_trial,
+            wall_seconds: self.wall_seconds,
+            jobs: self.jobs,
+            merged: self.merged.clone(),
+            settings: self.settings.clone(),
+            reports,
+        })
     }
 }
 

@@ -743,7 +743,7 @@ mod tests {
             jobs: 1,
         };
         let batch = Batch::new(&robot, &task, spec, &exec, options).unwrap();
-        let (report, timeline) = batch.record(0, TRACE_RATE);
+        let (report, timeline) = batch.record(0, TRACE_RATE).unwrap();
         let dir = std::env::temp_dir().join(format!("akl-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("trace.mcap");

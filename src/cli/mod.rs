@@ -2,12 +2,14 @@
 
 mod bench;
 mod inspect;
+mod report;
 mod shared;
 mod teaching;
 mod verify;
 
 pub(crate) use bench::*;
 pub(crate) use inspect::*;
+pub(crate) use report::*;
 pub(crate) use shared::*;
 pub(crate) use teaching::*;
 pub(crate) use verify::*;
@@ -213,4 +215,7 @@ pub(crate) enum Command {
     /// Measure the planner on shared problem sets, side by side with other planners.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Work with report files: merge the reports of a run's shards.
+    #[command(subcommand)]
+    Report(ReportCommand),
 }

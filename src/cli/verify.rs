@@ -90,6 +90,19 @@ pub(crate) struct ValidateArgs {
     /// Which of the spec's trials --trace writes.
     #[arg(long, value_name = "N", requires = "trace")]
     pub trace_trial: Option<usize>,
+    /// Write the trials the gate read as JUnit XML to this file (one test case per trial named
+    /// by its seed, a failed trial's root cause and detail as its failure; the gate's decision
+    /// as a property), for CI test reports.
+    #[arg(long, value_name = "FILE")]
+    pub junit: Option<PathBuf>,
+    /// Judge the trials of this report (`akl execute --randomize N --goals sampled`, or
+    /// `akl report merge` of its shards) instead of running any: the deployment gate reads them
+    /// in seed order, as it reads its own, so the decision is the one `akl validate --seed`
+    /// (the report's seed) gives. The spec, task, robot and settings must be the report's
+    /// (checked by their hashes). Removals and answers are not judged (they need trials of
+    /// other specs).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["demo", "trace", "report"])]
+    pub from_report: Option<PathBuf>,
     /// The demonstration the spec was learned from (JSONL or MCAP): check the teacher's answers.
     #[arg(long, value_name = "DEMO")]
     pub demo: Option<PathBuf>,
@@ -215,6 +228,27 @@ pub(crate) struct ExecuteArgs {
     /// Write the full report (every trial's checks) as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Run only shard I of N (from 0) of the --randomize trials: a contiguous block, each
+    /// trial with exactly the seed, layout and outcome it has in a single run, so `akl report
+    /// merge` joins the shards' reports into the single run's. `auto` takes I and N from a
+    /// Slurm job array (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT); `auto/N` from a
+    /// Kubernetes Indexed Job (JOB_COMPLETION_INDEX) of N completions.
+    #[arg(
+        long,
+        value_name = "I/N|auto|auto/N",
+        requires = "randomize",
+        conflicts_with = "grounding_check"
+    )]
+    pub shard: Option<akl_exec::shard::ShardRequest>,
+    /// Finish the interrupted run whose report is FILE: its trials are kept, the rest of the
+    /// run (or of its shard) are run, and the whole report is written to --report (default:
+    /// FILE). The other options must be the run's own (checked against the report's hashes).
+    #[arg(long, value_name = "FILE", requires = "randomize", conflicts_with_all = ["grounding_check", "trace"])]
+    pub resume: Option<PathBuf>,
+    /// Write the trials as JUnit XML to this file (one test case per trial named by its seed;
+    /// a failed trial's root cause and detail as its failure), for CI test reports.
+    #[arg(long, value_name = "FILE", conflicts_with = "grounding_check")]
+    pub junit: Option<PathBuf>,
     /// Perception error of the movable objects' poses that the planner sees: standard
     /// deviations in millimetres (along world x and y) and degrees (about the vertical);
     /// `0,0` plans on the true poses.

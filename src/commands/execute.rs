@@ -6,11 +6,14 @@ use crate::cli::{ExecuteArgs, Goals, PoseNoiseArg};
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
-use akl_exec::batch::{Batch, BatchOptions};
+use akl_exec::batch::{identity, Batch, BatchOptions};
 use akl_exec::error::ExecError;
+use akl_exec::junit::{junit, Suite};
+use akl_exec::merge::{self, StoredReport};
 use akl_exec::perception::PoseNoise;
-use akl_exec::report::{BatchReport, Cause};
-use akl_exec::ExecOptions;
+use akl_exec::report::{BatchReport, Cause, StoredTrial, TrialOutcome, TrialReport};
+use akl_exec::shard::Shard;
+use akl_exec::{ExecOptions, Setup};
 use akl_planner::PlanBudget;
 use akl_planner::{PlanOptions, Robot};
 use akl_scene::Task;
@@ -50,9 +53,18 @@ pub(crate) struct Execution<'a> {
     pub report: Option<&'a Path>,
 }
 
+/// What `akl execute` adds to an [`Execution`]: a shard of the run, a run to finish.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Sharding<'a> {
+    /// Run only this shard's trials.
+    pub shard: Option<Shard>,
+    /// The report of the interrupted run to finish.
+    pub resume: Option<&'a Path>,
+}
+
 /// The outcome of an execution, as `--json` prints it.
 #[derive(Serialize)]
-pub(crate) struct Executed {
+pub(crate) struct Executed<T = TrialReport> {
     /// The spec file.
     pub spec: String,
     /// The report file written, if any.
@@ -63,7 +75,7 @@ pub(crate) struct Executed {
     pub trace_trial: Option<usize>,
     /// The report.
     #[serde(flatten)]
-    pub report: BatchReport,
+    pub report: BatchReport<T>,
 }
 
 pub(super) fn run(args: ExecuteArgs) -> CliResult {
@@ -104,7 +116,18 @@ pub(super) fn run(args: ExecuteArgs) -> CliResult {
             &robot, &task, &spec, &args.spec, &options, &grounding, args.json,
         );
     }
-    let executed = execute(&Execution {
+    let shard = match args.shard {
+        Some(request) => Some(
+            request
+                .resolve(|name| std::env::var(name).ok())
+                .map_err(CliError::input)?,
+        ),
+        None => None,
+    };
+    if let Some(p) = &args.junit {
+        check_output(p, "JUnit file")?;
+    }
+    let execution = Execution {
         robot: &robot,
         task: &task,
         spec: &spec,
@@ -115,19 +138,41 @@ pub(super) fn run(args: ExecuteArgs) -> CliResult {
         trace: args.trace.as_deref(),
         trace_trial: args.trace_trial,
         options,
-        report: args.report.as_deref(),
-    })?;
+        report: args.report.as_deref().or(args.resume.as_deref()),
+    };
+    let sharding = Sharding {
+        shard,
+        resume: args.resume.as_deref(),
+    };
+    let (executed, expected) = execute_sharded(&execution, sharding)?;
+    if let Some(p) = &args.junit {
+        let name = format!("{} on {}", args.spec.display(), task.name);
+        let class = format!("akl.{}", task.name);
+        let mut properties = Vec::new();
+        if let Some(s) = executed.report.shard {
+            properties.push(("shard".to_string(), s.to_string()));
+        }
+        let suite = Suite {
+            name: &name,
+            class: &class,
+            properties,
+        };
+        akl_tsr::io::write_atomic(p, junit(&executed.report, &suite).as_bytes())
+            .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
+    }
     if args.json {
         print_json(&executed)?;
     } else {
         print_executed(&executed);
         print_outputs(&executed);
+        if let Some(p) = &args.junit {
+            println!("JUnit: {}", p.display());
+        }
     }
     if executed.report.interrupted {
         return Err(CliError::interrupted(format!(
-            "interrupted: {} of {} trials finished",
+            "interrupted: {} of {expected} trials finished",
             executed.report.trials,
-            args.randomize.unwrap_or(1)
         )));
     }
     verdict(&executed.report)
@@ -151,7 +196,7 @@ pub(crate) fn jobs(asked: Option<usize>) -> Result<usize, CliError> {
 }
 
 /// Exit code 1 when some trial failed.
-pub(crate) fn verdict(report: &BatchReport) -> CliResult {
+pub(crate) fn verdict<T: TrialOutcome>(report: &BatchReport<T>) -> CliResult {
     if report.all_passed() {
         Ok(())
     } else {
@@ -167,6 +212,98 @@ pub(crate) fn verdict(report: &BatchReport) -> CliResult {
 /// `e.options.interrupt` is raised no more trials start: the report of those that finished
 /// is written (marked interrupted) and the trace is not.
 pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
+    let trials = check_execution(e)?;
+    let batch = make_batch(e, trials, None, None)?;
+    let report = run_batch(e, &batch)?;
+    let written = |p: Option<&Path>| p.map(|p| p.display().to_string());
+    if let Some(p) = e.report {
+        report
+            .save(p)
+            .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
+    }
+    let trace_trial = write_trace(e, &batch, &report)?;
+    Ok(Executed {
+        spec: e.spec_path.display().to_string(),
+        report_file: written(e.report),
+        trace_file: written(e.trace.filter(|_| trace_trial.is_some())),
+        trace_trial,
+        report,
+    })
+}
+
+/// [`execute`] for `akl execute`: only the trials of `sharding.shard` when given, and, when
+/// `sharding.resume` names an interrupted run's report, only the trials it lacks, joined to
+/// those it kept. Returns the execution and the number of trials it should hold.
+fn execute_sharded(
+    e: &Execution,
+    sharding: Sharding,
+) -> Result<(Executed<StoredTrial>, usize), CliError> {
+    let trials = check_execution(e)?;
+    let stored = |r: &BatchReport| r.stored().map_err(CliError::internal);
+    let written = |p: Option<&Path>| p.map(|p| p.display().to_string());
+    let (report, trace_trial) = match sharding.resume {
+        None => {
+            let batch = make_batch(e, trials, sharding.shard, None)?;
+            let report = run_batch(e, &batch)?;
+            let trace_trial = write_trace(e, &batch, &report)?;
+            (stored(&report)?, trace_trial)
+        }
+        Some(path) => (resume(e, trials, sharding.shard, path)?, None),
+    };
+    if let Some(p) = e.report {
+        report
+            .save(p)
+            .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
+    }
+    let expected = sharding.shard.map_or(trials, |s| s.trials(trials).len());
+    Ok((
+        Executed {
+            spec: e.spec_path.display().to_string(),
+            report_file: written(e.report),
+            trace_file: written(e.trace.filter(|_| trace_trial.is_some())),
+            trace_trial,
+            report,
+        },
+        expected,
+    ))
+}
+
+/// Finishes the interrupted run whose report is `path`: the trials it lacks are run and
+/// joined to those it kept.
+fn resume(
+    e: &Execution,
+    trials: usize,
+    shard: Option<Shard>,
+    path: &Path,
+) -> Result<StoredReport, CliError> {
+    let kept = merge::read(path).map_err(CliError::input)?;
+    let setup = Setup {
+        robot: e.robot,
+        task: e.task,
+        spec: e.spec,
+        options: &e.options,
+    };
+    let missing = merge::check_resume(
+        path,
+        &kept,
+        &identity(&setup, trials),
+        e.seed,
+        e.randomize.is_some(),
+        shard,
+    )
+    .map_err(CliError::input)?;
+    if missing.is_empty() {
+        let mut whole = kept;
+        whole.interrupted = false;
+        return Ok(whole);
+    }
+    let batch = make_batch(e, trials, shard, Some(missing))?;
+    let more = run_batch(e, &batch)?;
+    merge::resume(path, &kept, &more).map_err(CliError::input)
+}
+
+/// Checks `e`'s outputs and trial counts before any work; returns the run's trials.
+fn check_execution(e: &Execution) -> Result<usize, CliError> {
     if let Some(p) = e.trace {
         check_output(p, "trace")?;
     }
@@ -178,62 +315,97 @@ pub(crate) fn execute(e: &Execution) -> Result<Executed, CliError> {
         Some(n) => n,
         None => 1,
     };
-    let jobs = jobs(e.jobs)?;
-    let options = BatchOptions {
-        trials,
-        randomize: e.randomize.is_some(),
-        seed: e.seed,
-        jobs: jobs.min(trials),
-    };
+    jobs(e.jobs)?;
     if let Some(i) = e.trace_trial.filter(|&i| i >= trials) {
         return Err(CliError::input(format!(
             "--trace-trial {i}: there are only {trials} trials (0 to {})",
             trials - 1
         )));
     }
-    let batch =
-        Batch::new(e.robot, e.task, e.spec, &e.options, options).map_err(|err| match err {
-            ExecError::Spec(source) => CliError::input(FileError {
-                path: e.spec_path.to_path_buf(),
-                source,
-            }),
-            ExecError::Scene(source) => {
-                CliError::input(format!("task `{}`: {source}", e.task.name))
-            }
-            other => CliError::input(other),
-        })?;
-    let progress = Progress::new(&format!("executing on `{}`", e.task.name), trials);
+    Ok(trials)
+}
+
+/// The batch of `e`'s run of `trials`: all of them, shard `shard`'s, or only `only` (of
+/// shard `shard`, if given).
+fn make_batch<'a>(
+    e: &'a Execution,
+    trials: usize,
+    shard: Option<Shard>,
+    only: Option<Vec<usize>>,
+) -> Result<Batch<'a>, CliError> {
+    let count = match (&only, shard) {
+        (Some(only), _) => only.len(),
+        (None, Some(s)) => s.trials(trials).len(),
+        (None, None) => trials,
+    };
+    let options = BatchOptions {
+        trials,
+        randomize: e.randomize.is_some(),
+        seed: e.seed,
+        jobs: jobs(e.jobs)?.min(count.max(1)),
+    };
+    let setup = Setup {
+        robot: e.robot,
+        task: e.task,
+        spec: e.spec,
+        options: &e.options,
+    };
+    let batch = match (only, shard) {
+        (Some(only), shard) => Batch::only(setup, options, shard, only),
+        (None, Some(shard)) => Batch::shard(setup, options, shard),
+        (None, None) => Batch::new(e.robot, e.task, e.spec, &e.options, options),
+    };
+    if let (Some(i), Ok(b)) = (e.trace_trial, &batch) {
+        if b.world(i).is_none() {
+            return Err(CliError::input(format!(
+                "--trace-trial {i}: not a trial of this shard (it runs trials {} to {})",
+                b.indices()[0],
+                b.indices()[b.indices().len() - 1]
+            )));
+        }
+    }
+    batch.map_err(|err| match err {
+        ExecError::Spec(source) => CliError::input(FileError {
+            path: e.spec_path.to_path_buf(),
+            source,
+        }),
+        ExecError::Scene(source) => CliError::input(format!("task `{}`: {source}", e.task.name)),
+        other => CliError::input(other),
+    })
+}
+
+/// Runs `batch`, showing progress.
+fn run_batch(e: &Execution, batch: &Batch) -> Result<BatchReport, CliError> {
+    let progress = Progress::new(
+        &format!("executing on `{}`", e.task.name),
+        batch.indices().len(),
+    );
     let report = batch
         .run(&|r| progress.tick(r.passed))
         .map_err(CliError::internal);
     progress.finish();
-    let report = report?;
-    let written = |p: Option<&Path>| p.map(|p| p.display().to_string());
-    if let Some(p) = e.report {
-        report
-            .save(p)
-            .map_err(|err| CliError::internal(format!("{}: {err}", p.display())))?;
-    }
-    let trace_trial = match e.trace.filter(|_| !report.interrupted) {
-        Some(p) => Some(
+    report
+}
+
+/// Writes the trace `e` asks for, unless the run was interrupted; returns the trial shown.
+fn write_trace(
+    e: &Execution,
+    batch: &Batch,
+    report: &BatchReport,
+) -> Result<Option<usize>, CliError> {
+    match e.trace.filter(|_| !report.interrupted) {
+        Some(p) => Ok(Some(
             batch
-                .write_trace(&report, e.trace_trial, p)
+                .write_trace(report, e.trace_trial, p)
                 .map_err(CliError::internal)?,
-        ),
-        None => None,
-    };
-    Ok(Executed {
-        spec: e.spec_path.display().to_string(),
-        report_file: written(e.report),
-        trace_file: written(e.trace.filter(|_| trace_trial.is_some())),
-        trace_trial,
-        report,
-    })
+        )),
+        None => Ok(None),
+    }
 }
 
 /// The causes seen in failed trials besides their root cause, e.g. `slipped 3, goal not met 5`
 /// (`none` if none).
-fn secondary(r: &BatchReport) -> String {
+fn secondary<T>(r: &BatchReport<T>) -> String {
     let seen: Vec<String> = r
         .secondary
         .iter()
@@ -251,12 +423,19 @@ fn millimetres(metres: Option<f64>) -> String {
 }
 
 /// Prints the summary table and the failed trials.
-pub(crate) fn print_executed(x: &Executed) {
+pub(crate) fn print_executed<T: TrialOutcome>(x: &Executed<T>) {
     let r = &x.report;
-    let placement = if r.randomized {
-        format!("{} randomized trials (seeds {}..)", r.trials, r.seed)
-    } else {
-        format!("{} trial(s) with the task's placements", r.trials)
+    let placement = match (r.randomized, r.shard) {
+        (true, Some(s)) => {
+            let first = r.reports.first().map_or(0, |t| t.index());
+            format!(
+                "shard {s}: {} randomized trials (trials {first}.., seeds {}..)",
+                r.trials,
+                r.seed + first as u64
+            )
+        }
+        (true, None) => format!("{} randomized trials (seeds {}..)", r.trials, r.seed),
+        (false, _) => format!("{} trial(s) with the task's placements", r.trials),
     };
     println!(
         "{}: {} spec on task `{}`, {placement}, {} in parallel",
@@ -278,21 +457,15 @@ pub(crate) fn print_executed(x: &Executed) {
     }
     row("also seen (not root)", secondary(r));
     row("worst line deviation", millimetres(r.worst_line_deviation));
-    let worst = |f: &dyn Fn(&akl_exec::report::TrialReport) -> f64| {
-        r.reports.iter().map(f).fold(0.0, f64::max)
+    let worst = |k: usize| {
+        r.reports
+            .iter()
+            .map(|t| t.extremes()[k])
+            .fold(0.0, f64::max)
     };
-    row(
-        "worst tracking error",
-        format!("{:.2} mm", worst(&|t| t.tracking.max) * 1e3),
-    );
-    row(
-        "deepest contact",
-        format!("{:.2} mm", worst(&|t| t.deepest_contact.value) * 1e3),
-    );
-    row(
-        "largest contact force",
-        format!("{:.1} N", worst(&|t| t.largest_force.value)),
-    );
+    row("worst tracking error", format!("{:.2} mm", worst(0) * 1e3));
+    row("deepest contact", format!("{:.2} mm", worst(1) * 1e3));
+    row("largest contact force", format!("{:.1} N", worst(2)));
     row(
         "perception noise (σ)",
         format!(
@@ -317,18 +490,19 @@ pub(crate) fn print_executed(x: &Executed) {
         ),
     );
     print!("{}", table.render());
-    let failed: Vec<_> = r.reports.iter().filter(|t| !t.passed).collect();
+    let failed: Vec<_> = r.reports.iter().filter(|t| !t.passed()).collect();
     if !failed.is_empty() {
         println!("failed trials (root cause first):");
         for t in failed.iter().take(LISTED_FAILURES) {
-            let first = t
-                .root()
-                .map_or(String::new(), |f| format!("{}: {}", f.cause, f.detail));
-            let more = match t.failures.len() {
+            let list = t.failure_list();
+            let first = list.first().map_or(String::new(), |(cause, detail)| {
+                format!("{cause}: {detail}")
+            });
+            let more = match list.len() {
                 0 | 1 => String::new(),
                 n => format!(" (and {} more)", n - 1),
             };
-            println!("  trial {} (seed {}): {first}{more}", t.trial, t.seed);
+            println!("  trial {} (seed {}): {first}{more}", t.index(), t.seed());
         }
         if failed.len() > LISTED_FAILURES {
             println!("  ... {} more", failed.len() - LISTED_FAILURES);
@@ -337,7 +511,7 @@ pub(crate) fn print_executed(x: &Executed) {
 }
 
 /// Prints where the report and trace went.
-fn print_outputs(x: &Executed) {
+fn print_outputs<T>(x: &Executed<T>) {
     if let Some(f) = &x.report_file {
         println!("report: {f}");
     }

@@ -11,6 +11,7 @@ mod grounding;
 mod learn;
 mod plan;
 mod relax;
+mod report;
 mod robot;
 mod robot_check;
 mod score;
@@ -48,6 +49,7 @@ pub(crate) fn run(cli: Cli) -> CliResult {
         Command::Demo(args) => demo::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(cmd) => bench::run(cmd),
+        Command::Report(cmd) => report::run(cmd),
     }
 }
 

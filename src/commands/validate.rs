@@ -7,16 +7,18 @@ use crate::cli::{GateArgs, TrialArgs, ValidateArgs};
 use crate::exit::{CliError, CliResult, NOT_MINIMAL, UNDECIDED};
 use crate::progress::Progress;
 use crate::table::Table;
-use akl_exec::batch::{settings, Batch, BatchOptions};
+use akl_exec::batch::{identity, settings, Batch, BatchOptions};
 use akl_exec::error::ExecError;
-use akl_exec::report::BatchReport;
-use akl_exec::ExecOptions;
+use akl_exec::junit::{junit, Suite};
+use akl_exec::merge;
+use akl_exec::report::{BatchReport, TrialOutcome};
+use akl_exec::{ExecOptions, Setup};
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::{Demo, LearnOptions};
 use akl_planner::Robot;
 use akl_scene::Task;
-use akl_stats::{Gate, GateOptions, GateVerdict};
+use akl_stats::{Decision, Gate, GateOptions, GateVerdict};
 use akl_tsr::TaskSpec;
 use akl_validate::ablation::Ablation;
 use akl_validate::answers::{AnswerVerdict, Answers, DemoSource};
@@ -138,6 +140,12 @@ pub(super) fn run(args: ValidateArgs) -> CliResult {
     let robot = load_robot(&args.robot)?;
     let task = super::load_task(&args.task)?;
     let spec = load_spec_for(&args.spec, &task, args.fit)?;
+    if let Some(p) = &args.junit {
+        check_output(p, "JUnit file")?;
+    }
+    if let Some(report) = &args.from_report {
+        return from_report(&args, &robot, &task, &spec, report);
+    }
     for (path, what) in [(&args.report, "report"), (&args.trace, "trace")] {
         if let Some(p) = path {
             check_output(p, what)?;
@@ -235,6 +243,10 @@ pub(super) fn run(args: ValidateArgs) -> CliResult {
         replays,
         validation: &validation,
     };
+    if let Some(p) = &args.junit {
+        let report = spec_report(&robot, &task, &spec, &options, &validation, wall);
+        write_junit(&args, &task, &report, p)?;
+    }
     if args.json {
         print_json(&validated)?;
     } else {
@@ -259,6 +271,226 @@ pub(super) fn run(args: ValidateArgs) -> CliResult {
             "interrupted: {} trials of the spec judged",
             validation.spec.outcome.run
         ))),
+    }
+}
+
+/// Writes `report`'s trials (those the gate read) as JUnit XML to `path`, the gate's
+/// question and decision as properties.
+fn write_junit<T: TrialOutcome>(
+    args: &ValidateArgs,
+    task: &Task,
+    report: &BatchReport<T>,
+    path: &Path,
+) -> CliResult {
+    let name = format!("{} on {}", args.spec.display(), task.name);
+    let class = format!("akl.{}", task.name);
+    let mut properties = Vec::new();
+    if let Some(g) = report.gate {
+        properties.push(("min_success".to_string(), g.options.min_success.to_string()));
+        properties.push(("confidence".to_string(), g.options.confidence.to_string()));
+        properties.push(("max_trials".to_string(), g.options.max_trials.to_string()));
+        properties.push((
+            "decision".to_string(),
+            g.decision
+                .map_or("none (interrupted)", |d| d.label())
+                .to_string(),
+        ));
+    }
+    let suite = Suite {
+        name: &name,
+        class: &class,
+        properties,
+    };
+    akl_tsr::io::write_atomic(path, junit(report, &suite).as_bytes())
+        .map_err(|e| CliError::internal(format!("{}: {e}", path.display())))?;
+    Ok(())
+}
+
+/// What `akl validate --from-report --json` prints.
+#[derive(Serialize)]
+struct FromReport {
+    spec_file: String,
+    report_file: String,
+    task: String,
+    seed: u64,
+    gate: GateOptions,
+    /// `None` when the report's trials run out before the gate decides.
+    decision: Option<Decision>,
+    /// Trials the gate read (in seed order, up to its decision).
+    trials_read: usize,
+    /// Trials the report holds.
+    trials_in_report: usize,
+    pass_rate: akl_stats::PassRate,
+    failed_seeds: Vec<u64>,
+    replays: Vec<Replay>,
+}
+
+/// `akl validate SPEC --task T --from-report FILE`: the gate over the report's trials in
+/// seed order, no trial run.
+fn from_report(
+    args: &ValidateArgs,
+    robot: &Robot,
+    task: &Task,
+    spec: &TaskSpec,
+    path: &Path,
+) -> CliResult {
+    let options = gate_options(&args.gate, GateOptions::default().max_trials)?;
+    let gate = Gate::new(options).map_err(CliError::input)?;
+    let mut report = merge::read(path).map_err(CliError::input)?;
+    let theirs = report
+        .identity
+        .clone()
+        .ok_or_else(|| CliError::input(merge::MergeError::NoIdentity { path: path.into() }))?;
+    let exec = verifying(&exec_options(&args.trials));
+    let setup = Setup {
+        robot,
+        task,
+        spec,
+        options: &exec,
+    };
+    let ours = identity(&setup, theirs.trials);
+    let refuse = |what: &str| {
+        CliError::input(format!(
+            "{}: the report's trials were not run {what}",
+            path.display()
+        ))
+    };
+    if ours.spec_hash != theirs.spec_hash {
+        return Err(refuse(&format!("with {}", args.spec.display())));
+    }
+    if ours.task_hash != theirs.task_hash {
+        return Err(refuse(&format!("on task `{}`", args.task)));
+    }
+    if ours.robot_hash != theirs.robot_hash {
+        return Err(refuse("with this robot"));
+    }
+    if ours.version != theirs.version {
+        return Err(refuse(&format!(
+            "by this akl (version {}, theirs {})",
+            ours.version, theirs.version
+        )));
+    }
+    if ours.settings_hash != theirs.settings_hash || !report.randomized {
+        return Err(refuse(
+            "as validation runs them: run `akl execute --randomize N --goals sampled` with the \
+             same --pose-noise and --speed-scale as this validate",
+        ));
+    }
+    if report.shard.is_some() {
+        return Err(refuse(
+            "as one whole run: it is one shard; merge the shards with `akl report merge` first",
+        ));
+    }
+    if let Some(gap) = report
+        .reports
+        .iter()
+        .enumerate()
+        .find(|(k, t)| t.index() != *k)
+    {
+        return Err(refuse(&format!(
+            "in an unbroken sequence: trial {} is missing (finish the run with `akl execute ... \
+             --resume {}`)",
+            gap.0,
+            path.display()
+        )));
+    }
+    let judged = gate.judge(report.reports.iter().map(TrialOutcome::passed));
+    let (decision, read) = match judged {
+        Some((d, n)) => (Some(d), n),
+        None => (None, report.reports.len()),
+    };
+    report.reports.truncate(read);
+    let failed_seeds: Vec<u64> = report
+        .reports
+        .iter()
+        .filter(|t| !t.passed())
+        .map(TrialOutcome::seed)
+        .collect();
+    let passed = read - failed_seeds.len();
+    let pass_rate = akl_stats::PassRate::new(passed, read);
+    if let Some(p) = &args.junit {
+        let mut gated = BatchReport::new(
+            &report.task,
+            &report.method,
+            report.seed,
+            true,
+            report.reports.clone(),
+            report.jobs,
+            report.wall_seconds,
+            report.settings.clone(),
+        );
+        gated.gate = Some(GateVerdict { options, decision });
+        write_junit(args, task, &gated, p)?;
+    }
+    let replays: Vec<Replay> = failed_seeds
+        .iter()
+        .map(|&seed| Replay {
+            seed,
+            command: replay_command(args, seed),
+        })
+        .collect();
+    let out = FromReport {
+        spec_file: args.spec.display().to_string(),
+        report_file: path.display().to_string(),
+        task: task.name.clone(),
+        seed: report.seed,
+        gate: options,
+        decision,
+        trials_read: read,
+        trials_in_report: report.trials,
+        pass_rate,
+        failed_seeds,
+        replays,
+    };
+    if args.json {
+        print_json(&out)?;
+    } else {
+        print_from_report(&out);
+    }
+    let name = args.spec.display();
+    match decision {
+        Some(Decision::Passes) => Ok(()),
+        Some(Decision::Fails) => Err(CliError::internal(format!("{name}: fails"))),
+        Some(Decision::Undecided) => Err(CliError::verdict(
+            UNDECIDED,
+            format!("{name}: undecided within {} trials", options.max_trials),
+        )),
+        None => Err(CliError::verdict(
+            UNDECIDED,
+            format!(
+                "{name}: undecided: the report's {} trials are too few for the gate to decide",
+                out.trials_in_report
+            ),
+        )),
+    }
+}
+
+fn print_from_report(x: &FromReport) {
+    println!(
+        "{} on task `{}`: does it succeed with probability at least {} at {:.0} % confidence? \
+         The trials of {} (seeds {}.., {} trials), judged in seed order (removals and answers \
+         are not judged from a report)",
+        x.spec_file,
+        x.task,
+        x.gate.min_success,
+        100.0 * x.gate.confidence,
+        x.report_file,
+        x.seed,
+        x.trials_in_report
+    );
+    let decision = x.decision.map_or_else(
+        || "undecided (the report holds too few trials)".to_string(),
+        |d| d.label().to_string(),
+    );
+    println!("spec: {decision} — passed {}", x.pass_rate);
+    if !x.replays.is_empty() {
+        println!("failed trials, and how to replay each:");
+        for r in x.replays.iter().take(LISTED_FAILURES) {
+            println!("  seed {}: {}", r.seed, r.command);
+        }
+        if x.replays.len() > LISTED_FAILURES {
+            println!("  ... {} more", x.replays.len() - LISTED_FAILURES);
+        }
     }
 }
 
