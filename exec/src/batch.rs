@@ -271,6 +271,7 @@ pub fn identity(setup: &Setup, trials: usize) -> Identity {
     };
     Identity {
         version: env!("CARGO_PKG_VERSION").to_string(),
+        platform: format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
         spec_hash: spec_hash(spec),
         task_hash: sha256(&format!("{task:?}")),
         robot_hash: sha256(&robot_text),

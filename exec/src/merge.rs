@@ -267,8 +267,9 @@ pub fn check_same_run(
 
 /// The first difference between two identities, with both values (`b`'s first).
 fn check_identity(a: &Identity, b: &Identity) -> Result<(), String> {
-    let pairs: [(&str, String, String); 6] = [
+    let pairs: [(&str, String, String); 7] = [
         ("the akl version", a.version.clone(), b.version.clone()),
+        ("the platform", a.platform.clone(), b.platform.clone()),
         ("the spec", a.spec_hash.clone(), b.spec_hash.clone()),
         ("the task", a.task_hash.clone(), b.task_hash.clone()),
         (

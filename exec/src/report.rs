@@ -544,6 +544,10 @@ impl TrialOutcome for StoredTrial {
 pub struct Identity {
     /// Version of the execution engine (the `akl-exec` crate).
     pub version: String,
+    /// The CPU architecture and operating system the trials ran on (`x86_64-linux`): floating
+    /// point may round differently on another, so parts of one run must share it.
+    #[serde(default)]
+    pub platform: String,
     /// The spec's canonical JSON.
     pub spec_hash: String,
     /// The task's canonical JSON: its world, goals and randomization ranges.
