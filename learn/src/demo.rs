@@ -3,6 +3,9 @@
 //! Columns keep the per-frame streams contiguous, which is what the detector and OKL scan, and
 //! cost no allocation per frame however many objects the scene has.
 
+use std::collections::BTreeMap;
+
+use akl_scene::Shape;
 use akl_tsr::{Gripper, Pose};
 use serde::{Deserialize, Serialize};
 
@@ -21,6 +24,11 @@ pub struct DemoHeader {
     /// Calibration the online detector used, if any (as recorded, e.g. a file name or `default`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calibration: Option<String>,
+    /// Shapes of tracked objects, by name, as a task file writes them (see [`crate::shapes`]):
+    /// with them a release is grounded by the task world's support rule when no task world is
+    /// given. Empty when the recording declares none.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub shapes: BTreeMap<String, Shape>,
 }
 
 /// The teacher's answer to "Do I have to move in a straight line there?".
@@ -96,6 +104,7 @@ impl DemoHeader {
             task: task.into(),
             frame: akl_tsr::WORLD_FRAME.to_string(),
             calibration: None,
+            shapes: BTreeMap::new(),
         }
     }
 }

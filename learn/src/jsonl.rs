@@ -1,6 +1,9 @@
 //! The JSONL demonstration format: a header line, then one frame or dialogue event per line.
 //!
-//! Any robot driver can write it. A frame line is
+//! Any robot driver can write it. The header line is
+//! `{"akl_demo": 1, "task": "...", "frame": "world"}`, optionally with `"shapes": {NAME: SHAPE}`
+//! declaring tracked objects' shapes as a task file writes them (see [`crate::shapes`]). A
+//! frame line is
 //! `{"t": 0.01, "ee": POSE, "gripper": "open", "objects": {"part": POSE}}`, optionally with
 //! `"constrained": true|false` (the online detector's state, written by `akl teach`); an event line
 //! is `{"t": 3.2, "event": "query" | "answer" | "suggestion" | "keyframe", "value": ...}`.

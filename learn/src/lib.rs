@@ -19,6 +19,7 @@ pub mod okl;
 pub mod recording;
 pub mod ros2;
 pub mod session;
+pub mod shapes;
 pub mod teach;
 pub mod teacher;
 pub mod tvd;

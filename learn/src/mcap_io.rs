@@ -32,7 +32,7 @@ const LOG_SCHEMA: &str = r#"{"title":"foxglove.Log","type":"object","properties"
 const GRIPPER_SCHEMA: &str = r#"{"title":"akl.Gripper","type":"object","properties":{"state":{"type":"string","enum":["open","closed"]}}}"#;
 const DETECTOR_SCHEMA: &str =
     r#"{"title":"akl.Detector","type":"object","properties":{"constrained":{"type":"boolean"}}}"#;
-const HEADER_SCHEMA: &str = r#"{"title":"akl.DemoHeader","type":"object","properties":{"akl_demo":{"type":"integer"},"task":{"type":"string"},"frame":{"type":"string"},"calibration":{"type":"string"}}}"#;
+const HEADER_SCHEMA: &str = r#"{"title":"akl.DemoHeader","type":"object","properties":{"akl_demo":{"type":"integer"},"task":{"type":"string"},"frame":{"type":"string"},"calibration":{"type":"string"},"shapes":{"type":"object"}}}"#;
 
 /// Streams a demonstration into an MCAP file.
 pub struct McapDemoWriter<W: Write + Seek> {

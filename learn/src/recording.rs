@@ -13,6 +13,7 @@ use crate::demo_error::DemoError;
 use crate::jsonl::{read_jsonl, JsonlDemoWriter};
 use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation, MCAP_MAGIC};
 use crate::session::{write_demo, RecordingSink};
+use crate::shapes::prepare_shapes;
 
 /// The two demonstration formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,7 +74,8 @@ pub struct LoadedDemo {
 }
 
 /// Reads a JSONL or MCAP demonstration (told apart by content, so `.partial` files of killed
-/// recordings read too); errors name the file and the line or frame.
+/// recordings read too), with the mesh files of the shapes its header declares (relative to
+/// its folder); errors name the file and the line or frame.
 pub fn read_demo_file(path: &Path) -> Result<LoadedDemo, DemoFileError> {
     let bytes = std::fs::read(path).map_err(|source| DemoFileError::Io {
         path: path.into(),
@@ -83,21 +85,35 @@ pub fn read_demo_file(path: &Path) -> Result<LoadedDemo, DemoFileError> {
         path: path.into(),
         source,
     };
-    if bytes.starts_with(MCAP_MAGIC) {
+    let mut loaded = if bytes.starts_with(MCAP_MAGIC) {
         let (demo, truncation) = read_mcap(&bytes).map_err(invalid)?;
-        return Ok(LoadedDemo {
+        LoadedDemo {
             demo,
             truncation,
             format: DemoFormat::Mcap,
-        });
-    }
-    let text = String::from_utf8(bytes)
-        .map_err(|_| invalid(DemoError::Format("neither MCAP nor UTF-8 JSONL".into())))?;
-    Ok(LoadedDemo {
-        demo: read_jsonl(&text).map_err(invalid)?,
-        truncation: None,
-        format: DemoFormat::Jsonl,
-    })
+        }
+    } else {
+        let text = String::from_utf8(bytes)
+            .map_err(|_| invalid(DemoError::Format("neither MCAP nor UTF-8 JSONL".into())))?;
+        LoadedDemo {
+            demo: read_jsonl(&text).map_err(invalid)?,
+            truncation: None,
+            format: DemoFormat::Jsonl,
+        }
+    };
+    let demo = &mut loaded.demo;
+    let tracked: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
+    let folder = path.parent().unwrap_or(Path::new(""));
+    prepare_shapes(&mut demo.header.shapes, folder, &tracked).map_err(|e| {
+        invalid(match loaded.format {
+            DemoFormat::Jsonl => DemoError::Line {
+                line: 1,
+                message: e.to_string(),
+            },
+            DemoFormat::Mcap => DemoError::Format(format!("the header: {e}")),
+        })
+    })?;
+    Ok(loaded)
 }
 
 enum Writer {

@@ -153,6 +153,16 @@ pub(crate) struct LearnArgs {
     /// The gripper counts as closed while its finger joints sum to less than this (metres).
     #[arg(long, default_value_t = 0.075, help_heading = "ROS 2 bags")]
     pub ros_closed_below: f64,
+    /// A JSON file of the bag's object shapes by name, written as in a task file (mesh files
+    /// relative to it): a release is then grounded on what it rests on by the task world's
+    /// support rule.
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "ros_ee",
+        help_heading = "ROS 2 bags"
+    )]
+    pub ros_shapes: Option<PathBuf>,
     /// Where to write the spec (JSON).
     #[arg(short, long)]
     pub output: Option<PathBuf>,

@@ -9,6 +9,7 @@ use akl_learn::method::{needs_replay, recorded_answers, without_dialogue};
 use akl_learn::okl::OklParams;
 use akl_learn::recording::read_demo_file;
 use akl_learn::ros2::{import_ros2, PoseSource, Ros2Topics};
+use akl_learn::shapes::read_shapes_file;
 use akl_learn::{learn_spec, prepare, Demo, LearnOptions, Method};
 use akl_scene::builtin;
 use akl_tsr::{Bounds, TaskSpec};
@@ -116,7 +117,8 @@ pub(super) fn run(args: LearnArgs) -> CliResult {
     Ok(())
 }
 
-/// The demonstration: a recording, or a ROS 2 bag read through the named topics.
+/// The demonstration: a recording, or a ROS 2 bag read through the named topics (with the
+/// shapes of `--ros-shapes`).
 fn read_demo(args: &LearnArgs) -> Result<Demo, CliError> {
     let Some(ee) = &args.ros_ee else {
         let loaded = read_demo_file(&args.demo).map_err(CliError::input)?;
@@ -144,8 +146,13 @@ fn read_demo(args: &LearnArgs) -> Result<Demo, CliError> {
     };
     let bytes = std::fs::read(&args.demo)
         .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
-    import_ros2(&bytes, &topics)
-        .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))
+    let mut demo = import_ros2(&bytes, &topics)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.demo.display())))?;
+    if let Some(file) = &args.ros_shapes {
+        let tracked: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
+        demo.header.shapes = read_shapes_file(file, &tracked).map_err(CliError::input)?;
+    }
+    Ok(demo)
 }
 
 /// `METRES,RADIANS` as symmetric TSR bounds.

@@ -12,6 +12,7 @@ use akl_learn::live::{LiveEnd, LiveStream};
 use akl_learn::okl::{LearnError, OklParams};
 use akl_learn::recording::Recording;
 use akl_learn::session::TeachingSession;
+use akl_learn::shapes::prepare_shapes;
 use akl_learn::teach::{self as learn_teach, session_header, Pace, SimulatedTeachingError};
 use akl_learn::{learn_spec, Demo, LearnOptions, Method};
 use akl_scene::{builtin, Task};
@@ -204,7 +205,13 @@ fn teach_live(
     let stdin = std::io::stdin();
     let mut stream = LiveStream::new(stdin.lock());
     let at_input = |e| CliError::input(format!("standard input: {e}"));
-    let start = stream.start().map_err(at_input)?;
+    let mut start = stream.start().map_err(at_input)?;
+    // Mesh files of declared shapes are relative to the current folder; the recording names
+    // them by their full path, so it reads wherever it is written.
+    let here = std::env::current_dir()
+        .map_err(|e| CliError::internal(format!("the current folder: {e}")))?;
+    prepare_shapes(&mut start.header.shapes, &here, &start.objects)
+        .map_err(|e| CliError::input(format!("standard input: line 1: {e}")))?;
     let task = match &args.task {
         Some(name) => Some(super::load_task(name)?),
         None => builtin::task(&start.header.task)

@@ -58,6 +58,7 @@ impl DemoBuilder {
                 task: task.into(),
                 frame: "world".into(),
                 calibration: None,
+                shapes: Default::default(),
             },
             exact: vec![Vector3::from(start)],
             rotation: UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0),
