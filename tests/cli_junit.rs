@@ -8,13 +8,11 @@ use std::path::Path;
 mod common;
 use common::*;
 
-/// The test cases of the JUnit file at `path`: (name, failure message and type if failed).
-fn cases(
-    path: &Path,
-) -> (
-    roxmltree::Document<'static>,
-    Vec<(String, Option<(String, String)>)>,
-) {
+/// A test case: its name, and its failure's message and type if it failed.
+type Case = (String, Option<(String, String)>);
+
+/// The JUnit file at `path`, parsed, and its test cases.
+fn cases(path: &Path) -> (roxmltree::Document<'static>, Vec<Case>) {
     let text: &'static str = Box::leak(std::fs::read_to_string(path).unwrap().into_boxed_str());
     let doc = roxmltree::Document::parse(text).unwrap_or_else(|e| panic!("{e}: {text}"));
     let cases = doc
