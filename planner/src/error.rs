@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 /// Why a robot folder could not be loaded.
+#[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum RobotError {
     /// A file of the robot folder could not be read.
@@ -204,6 +205,7 @@ pub enum PandaIkError {
 }
 
 /// Why inverse kinematics found no configuration.
+#[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IkError {
     /// No configuration within the joint limits puts the TCP at the target.
@@ -216,6 +218,7 @@ pub enum IkError {
 
 /// Why a spec could not be planned; every variant but [`PlanError::Options`] names the
 /// keyframe or segment at fault.
+#[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PlanError {
     /// The planning options are out of range (e.g. a speed scale of 0).

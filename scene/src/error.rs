@@ -4,6 +4,7 @@ use akl_tsr::error::describe_json_error;
 use akl_tsr::{FileError, SpecError};
 
 /// Why a task could not be loaded, validated or randomized.
+#[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file could not be read.

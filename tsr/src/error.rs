@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 /// Why a task spec could not be read, validated or grounded.
+#[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
     /// The file could not be read.

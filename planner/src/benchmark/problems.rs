@@ -84,6 +84,7 @@ pub enum ObstacleShape {
 }
 
 /// Why a problem file cannot be used.
+#[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum ProblemFileError {
     /// The file could not be read.
