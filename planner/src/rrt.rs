@@ -1,5 +1,10 @@
 //! RRT-Connect (Kuffner & LaValle 2000) in joint space: two trees, one from the start and
 //! one from every goal configuration, each extension greedily connecting the other tree.
+//!
+//! Two refinements, each an option: a dynamic domain (Yershova, Jaillet, Siméon and LaValle,
+//! ICRA 2005), which stops sampling far from the nodes next to obstacles, so that a tree in
+//! a narrow space is not pulled against its walls by samples it can never reach; and balanced
+//! trees, which always grow the smaller one.
 
 use crate::space::{distance, Space};
 use rand::Rng;
@@ -11,6 +16,37 @@ pub struct RrtOptions {
     pub range: f64,
     /// Samples drawn before giving up.
     pub max_iterations: usize,
+    /// The dynamic domain, if used: a sample farther from its nearest node than the node's
+    /// domain radius is drawn again (see [`DynamicDomain`]).
+    pub dynamic_domain: Option<DynamicDomain>,
+    /// Whether the smaller tree is always the one extended toward the sample (otherwise the
+    /// trees take turns).
+    pub balance: bool,
+}
+
+/// The dynamic domain's settings: a node whose extension hit an obstacle gets a finite
+/// radius (`radius`, radians), which each success from it widens by a factor `1 + alpha` and
+/// each failure narrows by `1 - alpha`, never below `min_radius`; other nodes' domains are
+/// unbounded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicDomain {
+    /// The radius a node's domain gets when an extension from it first fails.
+    pub radius: f64,
+    /// How much each later success widens, and each failure narrows, it.
+    pub alpha: f64,
+    /// The smallest radius.
+    pub min_radius: f64,
+}
+
+impl Default for DynamicDomain {
+    /// VAMP's settings for the Panda (radius 4, alpha 1e-4, at least 1).
+    fn default() -> Self {
+        DynamicDomain {
+            radius: 4.0,
+            alpha: 1e-4,
+            min_radius: 1.0,
+        }
+    }
 }
 
 impl Default for RrtOptions {
@@ -18,6 +54,8 @@ impl Default for RrtOptions {
         RrtOptions {
             range: 1.0,
             max_iterations: 20_000,
+            dynamic_domain: Some(DynamicDomain::default()),
+            balance: true,
         }
     }
 }
@@ -29,6 +67,8 @@ struct Tree {
     parents: Vec<usize>,
     /// Index of the root each node descends from (the goal tree has several roots).
     roots: Vec<usize>,
+    /// Each node's dynamic-domain radius (infinite until an extension from it fails).
+    radii: Vec<f64>,
 }
 
 const NO_PARENT: usize = usize::MAX;
@@ -40,6 +80,7 @@ impl Tree {
             nodes: Vec::new(),
             parents: Vec::new(),
             roots: Vec::new(),
+            radii: Vec::new(),
         }
     }
 
@@ -55,6 +96,7 @@ impl Tree {
         let i = self.len();
         self.nodes.extend_from_slice(q);
         self.parents.push(parent);
+        self.radii.push(f64::INFINITY);
         self.roots.push(if parent == NO_PARENT {
             i
         } else {
@@ -97,13 +139,25 @@ enum Extend {
     Reached(usize),
     Advanced(usize),
     Trapped,
+    /// The target lies outside the nearest node's dynamic domain: nothing was checked.
+    Outside,
 }
 
-/// Extends `tree` one step of at most `range` towards `target`.
-fn extend(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend {
+/// Extends `tree` one step of at most `range` towards `target`, within the nodes' dynamic
+/// domains if `domain` is given (and updating them).
+fn extend(
+    tree: &mut Tree,
+    target: &[f64],
+    space: &Space,
+    range: f64,
+    domain: Option<&DynamicDomain>,
+) -> Extend {
     let near = tree.nearest(target);
     let from = tree.node(near).to_vec();
     let d = distance(&from, target);
+    if domain.is_some() && d > tree.radii[near] {
+        return Extend::Outside;
+    }
     let (to, reached) = if d <= range {
         (target.to_vec(), true)
     } else {
@@ -117,7 +171,21 @@ fn extend(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend 
         )
     };
     if !space.edge_valid(&from, &to) {
+        if let Some(dd) = domain {
+            let r = &mut tree.radii[near];
+            *r = if r.is_finite() {
+                (*r * (1.0 - dd.alpha)).max(dd.min_radius)
+            } else {
+                dd.radius
+            };
+        }
         return Extend::Trapped;
+    }
+    if let Some(dd) = domain {
+        let r = &mut tree.radii[near];
+        if r.is_finite() {
+            *r *= 1.0 + dd.alpha;
+        }
     }
     let i = tree.add(&to, near);
     if reached {
@@ -130,7 +198,7 @@ fn extend(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend 
 /// Extends `tree` towards `target` until it reaches it or is blocked.
 fn connect(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend {
     loop {
-        match extend(tree, target, space, range) {
+        match extend(tree, target, space, range, None) {
             Extend::Advanced(_) => continue,
             other => return other,
         }
@@ -191,8 +259,9 @@ pub fn rrt_connect<R: Rng + ?Sized>(
     let mut sample = vec![0.0; dof];
     for iteration in 1..=options.max_iterations {
         space.sample(rng, &mut sample);
+        let domain = options.dynamic_domain.as_ref();
         if let Extend::Advanced(new) | Extend::Reached(new) =
-            extend(&mut a, &sample, space, options.range)
+            extend(&mut a, &sample, space, options.range, domain)
         {
             let q_new = a.node(new).to_vec();
             if let Extend::Reached(other) = connect(&mut b, &q_new, space, options.range) {
@@ -218,8 +287,10 @@ pub fn rrt_connect<R: Rng + ?Sized>(
                 };
             }
         }
-        std::mem::swap(&mut a, &mut b);
-        a_is_start = !a_is_start;
+        if !options.balance || b.len() < a.len() {
+            std::mem::swap(&mut a, &mut b);
+            a_is_start = !a_is_start;
+        }
     }
     RrtResult::Exhausted {
         iterations: options.max_iterations,
@@ -237,6 +308,86 @@ mod tests {
     use akl_tsr::pose::pose_from_xyz;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
+
+    /// A sample beyond a node's dynamic domain is turned away unchecked; an extension that
+    /// meets an obstacle gives its node the domain's radius, and each later failure narrows it
+    /// down to the least radius.
+    #[test]
+    fn the_dynamic_domain_turns_far_samples_away_and_narrows_on_failure() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+        world.objects.push(Object {
+            name: "wall".into(),
+            shape: Shape::Box {
+                size: [0.4, 0.02, 0.7],
+            },
+            pose: pose_from_xyz([0.4, 0.2, 0.55]),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let allow = Allowances::default();
+        let space = Space {
+            checker: &checker,
+            width: robot.open_width(),
+            held: None,
+            allow: &allow,
+        };
+        let domain = DynamicDomain {
+            radius: 1.5,
+            alpha: 0.25,
+            min_radius: 1.0,
+        };
+        let ready = robot.ready().to_vec();
+        let mut tree = Tree::new(robot.dof());
+        tree.add(&ready, NO_PARENT);
+        // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
+        let mut blocked = ready.clone();
+        blocked[0] += 1.2;
+        assert!(matches!(
+            extend(&mut tree, &blocked, &space, 2.0, Some(&domain)),
+            Extend::Trapped
+        ));
+        assert_eq!(tree.radii[0], 1.5);
+        assert!(matches!(
+            extend(&mut tree, &blocked, &space, 2.0, Some(&domain)),
+            Extend::Trapped
+        ));
+        assert_eq!(tree.radii[0], 1.125);
+        // Narrowed no further than the least radius (a target within the domain).
+        let mut blocked_nearer = ready.clone();
+        blocked_nearer[0] += 1.1;
+        assert!(matches!(
+            extend(&mut tree, &blocked_nearer, &space, 2.0, Some(&domain)),
+            Extend::Trapped
+        ));
+        assert_eq!(tree.radii[0], 1.0);
+        // Farther than the radius: turned away, nothing added.
+        let mut far = ready.clone();
+        far[0] -= 1.1;
+        assert!(matches!(
+            extend(&mut tree, &far, &space, 2.0, Some(&domain)),
+            Extend::Outside
+        ));
+        assert_eq!(tree.len(), 1);
+        // Within it and free: the node grows and its domain widens.
+        let mut near = ready.clone();
+        near[0] -= 0.5;
+        assert!(matches!(
+            extend(&mut tree, &near, &space, 2.0, Some(&domain)),
+            Extend::Reached(1)
+        ));
+        assert_eq!(tree.radii[0], 1.25);
+        assert!(tree.radii[1].is_infinite());
+        // Without a domain nothing is turned away.
+        assert!(matches!(
+            extend(&mut tree, &far, &space, 2.0, None),
+            Extend::Reached(2) | Extend::Advanced(2)
+        ));
+    }
 
     /// Every path RRT-Connect returns between random collision-free configurations, as found
     /// and after shortcutting, joins the start to the goal and keeps half of every margin under

@@ -34,9 +34,17 @@ pub(crate) struct BenchPlanningArgs {
     /// Runs per problem; run s uses seed s.
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub seeds: u64,
-    /// Samples RRT-Connect draws before it gives up on a run.
-    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    /// Samples RRT-Connect draws before it gives up on a run (those the dynamic domain turns
+    /// away count; the default is VAMP's).
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
     pub max_iterations: usize,
+    /// Plan without the dynamic domain (samples far from a node that met an obstacle are
+    /// not drawn again), to measure what it gives.
+    #[arg(long)]
+    pub no_dynamic_domain: bool,
+    /// Let the two trees take turns instead of always growing the smaller one.
+    #[arg(long)]
+    pub no_balance: bool,
     /// Only the problems of these sets (repeatable).
     #[arg(long, value_name = "NAME")]
     pub set: Vec<String>,

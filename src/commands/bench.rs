@@ -12,7 +12,7 @@ use akl_planner::benchmark::{
     Times,
 };
 use akl_planner::collision::RobotCollision;
-use akl_planner::rrt::RrtOptions;
+use akl_planner::rrt::{DynamicDomain, RrtOptions};
 use std::path::Path;
 
 /// Runs `akl bench ...`.
@@ -50,6 +50,8 @@ fn planning(args: &BenchPlanningArgs) -> CliResult {
         seeds: args.seeds,
         rrt: RrtOptions {
             max_iterations: args.max_iterations,
+            dynamic_domain: (!args.no_dynamic_domain).then(DynamicDomain::default),
+            balance: !args.no_balance,
             ..RrtOptions::default()
         },
     };
