@@ -159,10 +159,18 @@ pub fn read(path: &Path) -> Result<StoredReport, MergeError> {
             });
         }
     }
-    serde_json::from_value(header).map_err(|source| MergeError::Parse {
-        path: path.to_path_buf(),
-        source,
-    })
+    let report: StoredReport =
+        serde_json::from_value(header).map_err(|source| MergeError::Parse {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    if let Some(s) = report.shard {
+        Shard::new(s.index, s.count).map_err(|e| MergeError::Trials {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })?;
+    }
+    Ok(report)
 }
 
 /// The trials of its run a report should hold: its shard's block, or all of them.
@@ -337,7 +345,8 @@ pub fn check_resume(
     missing(path, kept)
 }
 
-/// Merges the shard reports `parts` (each with its file) into the report of the whole run.
+/// Merges the shard reports `parts` (each with its file, as [`read`] gives them) into the
+/// report of the whole run.
 pub fn merge(parts: &[(PathBuf, StoredReport)]) -> Result<StoredReport, MergeError> {
     let (first_path, first) = parts.first().ok_or(MergeError::NoParts)?;
     let mut by_shard: Vec<Option<&PathBuf>> = Vec::new();
@@ -349,17 +358,11 @@ pub fn merge(parts: &[(PathBuf, StoredReport)]) -> Result<StoredReport, MergeErr
             });
         }
         check_same_run(first_path, first, path, part)?;
-        let expected = expected_trials(path, part)?;
-        let have = checked_trials(path, part, &expected)?;
-        if part.interrupted || have.len() != expected.len() {
-            return Err(MergeError::Interrupted {
-                path: path.clone(),
-                done: have.len(),
-                expected: expected.len(),
-            });
-        }
         let shard = match (part.shard, parts.len()) {
-            (Some(s), _) => s,
+            (Some(s), _) => Shard::new(s.index, s.count).map_err(|e| MergeError::Trials {
+                path: path.clone(),
+                detail: e.to_string(),
+            })?,
             (None, 1) => Shard { index: 0, count: 1 },
             (None, _) => return Err(MergeError::NotAShard { path: path.clone() }),
         };
@@ -369,6 +372,21 @@ pub fn merge(parts: &[(PathBuf, StoredReport)]) -> Result<StoredReport, MergeErr
                 shard,
                 first: first_path.clone(),
                 first_shard: f,
+            });
+        }
+        let expected = expected_trials(path, part)?;
+        if expected.is_empty() {
+            return Err(MergeError::Trials {
+                path: path.clone(),
+                detail: "its shard holds no trial of the run".into(),
+            });
+        }
+        let have = checked_trials(path, part, &expected)?;
+        if part.interrupted || have.len() != expected.len() {
+            return Err(MergeError::Interrupted {
+                path: path.clone(),
+                done: have.len(),
+                expected: expected.len(),
             });
         }
         by_shard.resize(shard.count, None);
@@ -474,4 +492,164 @@ pub fn resume(
 
 fn shard_text(shard: Option<Shard>) -> String {
     shard.map_or_else(|| "the whole run".into(), |s| format!("shard {s}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::Settings;
+    use serde_json::json;
+
+    fn settings() -> Settings {
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        crate::batch::settings(
+            &akl_planner::Robot::panda().unwrap(),
+            &crate::ExecOptions::default(),
+            &task.truth.unwrap(),
+        )
+    }
+
+    /// Trial `i` of a run seeded 10, failing with a collision when `i` is odd.
+    fn trial(i: usize) -> StoredTrial {
+        let failures = if i % 2 == 1 {
+            json!([
+                {"cause": "collision", "stage": "simulation", "t": 1.0, "root": true, "detail": "hit"},
+                {"cause": "goal_not_met", "stage": "simulation", "t": 4.0, "root": false, "detail": "off"}
+            ])
+        } else {
+            json!([])
+        };
+        StoredTrial::from_json(json!({
+            "trial": i, "seed": 10 + i, "passed": i % 2 == 0, "failures": failures,
+            "lines": [{"deviation": 0.001 * i as f64}], "plan_seconds": 0.1, "sim_seconds": 0.2,
+            "tracking": {"max": 0.0, "rms": 0.0},
+            "deepest_contact": {"value": 0.0}, "largest_force": {"value": 0.0}
+        }))
+        .unwrap()
+    }
+
+    /// The report of shard `shard` (or the whole run) of a 4-trial run, holding `trials`.
+    fn part(shard: Option<Shard>, trials: &[usize], settings: &Settings) -> StoredReport {
+        let mut r = BatchReport::new(
+            "inspection",
+            "truth",
+            10,
+            true,
+            trials.iter().map(|&i| trial(i)).collect(),
+            1,
+            1.0,
+            settings.clone(),
+        );
+        r.shard = shard;
+        r.identity = Some(Identity {
+            version: "1".into(),
+            platform: "x".into(),
+            spec_hash: "s".into(),
+            task_hash: "t".into(),
+            robot_hash: "r".into(),
+            settings_hash: "e".into(),
+            trials: 4,
+        });
+        r
+    }
+
+    fn files(parts: Vec<StoredReport>) -> Vec<(PathBuf, StoredReport)> {
+        parts
+            .into_iter()
+            .enumerate()
+            .map(|(k, p)| (PathBuf::from(format!("part{k}.json")), p))
+            .collect()
+    }
+
+    #[test]
+    fn shards_merge_into_the_whole_run_and_bad_sets_are_refused_naming_the_part() {
+        let s = settings();
+        let shard = |index| Some(Shard { index, count: 2 });
+        let whole = part(None, &[0, 1, 2, 3], &s);
+        let merged = merge(&files(vec![
+            part(shard(1), &[2, 3], &s),
+            part(shard(0), &[0, 1], &s),
+        ]))
+        .unwrap();
+        let order: Vec<usize> = merged.reports.iter().map(TrialOutcome::index).collect();
+        assert_eq!(order, [0, 1, 2, 3]);
+        assert_eq!((merged.trials, merged.passed), (whole.trials, whole.passed));
+        assert_eq!(merged.pass_rate, whole.pass_rate);
+        assert_eq!(merged.failures, whole.failures);
+        assert_eq!(merged.secondary, whole.secondary);
+        assert_eq!(merged.worst_line_deviation, Some(0.003));
+        assert_eq!(merged.reports, whole.reports);
+        assert_eq!(merged.merged.as_ref().map(Vec::len), Some(2));
+
+        let refused = |parts: Vec<StoredReport>| merge(&files(parts)).unwrap_err();
+        let e = refused(vec![part(shard(0), &[0, 1], &s)]);
+        assert!(
+            matches!(e, MergeError::Missing { ref missing, .. } if missing == &[1]),
+            "{e}"
+        );
+        let e = refused(vec![
+            part(shard(0), &[0, 1], &s),
+            part(shard(0), &[0, 1], &s),
+        ]);
+        assert!(matches!(e, MergeError::Duplicate { .. }), "{e}");
+        assert!(e.to_string().starts_with("part1.json"), "{e}");
+        let mut cut = part(shard(1), &[2], &s);
+        cut.interrupted = true;
+        let e = refused(vec![part(shard(0), &[0, 1], &s), cut]);
+        assert!(
+            matches!(
+                e,
+                MergeError::Interrupted {
+                    done: 1,
+                    expected: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let mut other = part(shard(1), &[2, 3], &s);
+        other.identity.as_mut().unwrap().spec_hash = "another".into();
+        let e = refused(vec![part(shard(0), &[0, 1], &s), other]);
+        assert!(
+            e.to_string().contains("part1.json") && e.to_string().contains("the spec"),
+            "{e}"
+        );
+        let e = refused(vec![
+            part(shard(0), &[0, 1], &s),
+            part(Some(Shard { index: 2, count: 3 }), &[3], &s),
+        ]);
+        assert!(matches!(e, MergeError::ShardCount { .. }), "{e}");
+        let e = refused(vec![
+            part(shard(0), &[0, 1], &s),
+            part(Some(Shard { index: 5, count: 2 }), &[2, 3], &s),
+        ]);
+        assert!(matches!(e, MergeError::Trials { .. }), "{e}");
+        let e = refused(vec![
+            part(shard(0), &[0, 1], &s),
+            part(shard(1), &[1, 3], &s),
+        ]);
+        assert!(e.to_string().contains("not one of its trials"), "{e}");
+        let e = refused(vec![
+            part(shard(0), &[0, 1], &s),
+            part(None, &[0, 1, 2, 3], &s),
+        ]);
+        assert!(matches!(e, MergeError::NotAShard { .. }), "{e}");
+    }
+
+    #[test]
+    fn an_interrupted_report_lacks_the_trials_that_did_not_finish() {
+        let s = settings();
+        let mut r = part(None, &[0, 2], &s);
+        r.interrupted = true;
+        assert_eq!(missing(Path::new("r.json"), &r).unwrap(), [1, 3]);
+        let shard = Some(Shard { index: 1, count: 2 });
+        let r = part(shard, &[3], &s);
+        assert_eq!(missing(Path::new("r.json"), &r).unwrap(), [2]);
+        let id = r.identity.clone().unwrap();
+        assert!(check_resume(Path::new("r.json"), &r, &id, 10, true, shard).is_ok());
+        let e = check_resume(Path::new("r.json"), &r, &id, 11, true, shard).unwrap_err();
+        assert!(e.to_string().contains("the seed"), "{e}");
+        let e = check_resume(Path::new("r.json"), &r, &id, 10, true, None).unwrap_err();
+        assert!(e.to_string().contains("the shard"), "{e}");
+    }
 }
