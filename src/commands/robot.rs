@@ -347,6 +347,7 @@ fn ik(pose_text: &str, seed_text: Option<&str>, arg: &RobotArg, json: bool) -> C
             pose_line(&target)
         )),
         IkError::BadSeed(m) => CliError::input(format!("--seed-joints: {m}")),
+        other => CliError::internal(other),
     })?;
     let tcp = robot.tcp_pose(&q);
     if json {
