@@ -7,5 +7,6 @@
 pub mod plots;
 pub mod population;
 pub mod records;
+pub mod shards;
 pub mod study;
 pub mod summary;

@@ -36,7 +36,7 @@ use akl_learn::Method;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The method orders of the study's Latin square (thesis §4.4): participant i takes row
 /// i mod 3, so each method is taught first, second and third equally often.
@@ -47,7 +47,7 @@ pub const LATIN_SQUARE: [[Method; 3]; 3] = [
 ];
 
 /// A closed range a parameter is drawn from uniformly.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Span {
     /// Lowest value.
     pub lo: f64,
@@ -70,7 +70,7 @@ impl Span {
 }
 
 /// The ranges of one group of participants' habits.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Group {
     /// Hand speed along the path (m/s).
     pub speed: Span,
@@ -97,7 +97,7 @@ pub struct Group {
 }
 
 /// The study's population: two groups and how they are mixed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Population {
     /// Share of participants who have handled robots before.
     pub experienced_share: f64,
@@ -114,7 +114,7 @@ pub struct Population {
 }
 
 /// One simulated participant.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Participant {
     /// 1-based number.
     pub id: usize,

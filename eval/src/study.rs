@@ -1,6 +1,7 @@
 //! Running the study: every participant calibrates, then teaches every task with every method
 //! in its Latin-square order, and every learned spec is scored (thesis §4.2, §4.4).
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -14,7 +15,7 @@ use akl_learn::{learn_spec, LearnOptions, Method};
 use akl_scene::Task;
 use akl_tsr::TaskSpec;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::population::{Participant, Population};
 
@@ -42,6 +43,9 @@ pub struct StudyOptions<'a> {
     pub tasks: &'a [Task],
     /// Executes each learned spec this many times when an executor is given.
     pub execute: Option<(&'a dyn Executor, usize)>,
+    /// Run only these participants (0-based, a contiguous block of the `participants` drawn),
+    /// each exactly as in the whole study: one shard of it. `None`: all.
+    pub only: Option<Range<usize>>,
     /// Raised to stop part-way (Ctrl-C): once it is, no participant starts another trial; the
     /// trials under way (their executions included) finish, and the study holds those that
     /// did ([`Study::interrupted`]). `None`: never stopped.
@@ -54,6 +58,16 @@ pub enum StudyError {
     /// No participants or no tasks.
     #[error("a study needs at least one participant and one task")]
     Empty,
+    /// The block of participants to run is empty or beyond those drawn.
+    #[error("participants {start} to {end} (from 0) are not a block of the {drawn} drawn")]
+    Block {
+        /// First of the block.
+        start: usize,
+        /// Past its last.
+        end: usize,
+        /// Participants drawn.
+        drawn: usize,
+    },
     /// A task has no ground truth to score against.
     #[error("task `{0}` has no ground truth to score against")]
     NoTruth(String),
@@ -70,7 +84,7 @@ pub enum StudyError {
 }
 
 /// One participant teaching one task with one method, and how the learned spec scored.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trial {
     /// The participant (1-based).
     pub participant: usize,
@@ -155,7 +169,7 @@ pub struct Trial {
 }
 
 /// One participant's calibration.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Calibrated {
     /// The participant.
     pub participant: usize,
@@ -166,10 +180,20 @@ pub struct Calibrated {
 }
 
 /// A whole study: who took part and every trial, in participant, method-order, task order.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Study {
     /// Seed of the study.
     pub seed: u64,
+    /// Participants drawn for the whole study (those of every shard).
+    #[serde(default)]
+    pub drawn: usize,
+    /// The participants this study ran (0-based, a contiguous block), when it is one shard of
+    /// a study ([`StudyOptions::only`]); absent when it ran all of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub block: Option<Range<usize>>,
+    /// Randomized executions of each learned spec (`--execute`), if any.
+    #[serde(default)]
+    pub executions_per_spec: Option<usize>,
     /// Whether it was stopped (Ctrl-C) before every trial had run: `trials` then holds, for
     /// each participant, the trials it finished, in its order.
     pub interrupted: bool,
@@ -199,7 +223,17 @@ pub fn run_study(
         return Err(StudyError::NoTruth(t.name.clone()));
     }
     let population = Population::study();
-    let participants = population.draw(options.participants, options.seed);
+    let mut participants = population.draw(options.participants, options.seed);
+    if let Some(block) = &options.only {
+        if block.is_empty() || block.end > participants.len() {
+            return Err(StudyError::Block {
+                start: block.start,
+                end: block.end,
+                drawn: participants.len(),
+            });
+        }
+        participants = participants[block.clone()].to_vec();
+    }
     let results: Vec<(Calibrated, Vec<Trial>)> = participants
         .par_iter()
         .map(|p| run_participant(p, options, progress))
@@ -212,6 +246,9 @@ pub fn run_study(
     let trials: Vec<Trial> = trials.into_iter().flatten().collect();
     Ok(Study {
         seed: options.seed,
+        drawn: options.participants,
+        block: options.only.clone(),
+        executions_per_spec: options.execute.map(|(_, n)| n),
         interrupted: trials.len() < planned,
         population,
         participants,
@@ -497,6 +534,7 @@ mod tests {
             seed: 5,
             tasks: &tasks,
             execute: None,
+            only: None,
             stop: None,
         };
         let count = std::sync::atomic::AtomicUsize::new(0);
@@ -544,6 +582,7 @@ mod tests {
             seed: 5,
             tasks: &tasks,
             execute: None,
+            only: None,
             stop: Some(&stop),
         };
         let count = std::sync::atomic::AtomicUsize::new(0);
@@ -576,6 +615,7 @@ mod tests {
             seed: 0,
             tasks: &[],
             execute: None,
+            only: None,
             stop: None,
         };
         assert_eq!(run_study(&none, &|_| {}), Err(StudyError::Empty));
@@ -586,6 +626,7 @@ mod tests {
             seed: 0,
             tasks: &tasks,
             execute: None,
+            only: None,
             stop: None,
         };
         assert_eq!(

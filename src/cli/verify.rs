@@ -312,6 +312,15 @@ pub(crate) struct EvalArgs {
     /// Folder for trials.csv, trials.json and the SVG figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Run only shard I of N (from 0) of the participants: a contiguous block, each participant
+    /// exactly as in the whole study; `auto` and `auto/N` as in `akl execute --shard`. Join the
+    /// shards' trials.json with --merge.
+    #[arg(long, value_name = "I/N|auto|auto/N")]
+    pub shard: Option<akl_exec::shard::ShardRequest>,
+    /// Instead of running a study, join the trials.json files of its shards (`--shard I/N
+    /// --out DIR`) into the whole study: its tables, and with --out its records and figures.
+    #[arg(long, value_name = "TRIALS_JSON", num_args = 1.., conflicts_with_all = ["participants", "seed", "execute", "shard"])]
+    pub merge: Vec<PathBuf>,
     /// Print the tables and every trial's scores as JSON.
     #[arg(long)]
     pub json: bool,

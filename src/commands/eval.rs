@@ -7,6 +7,7 @@ use crate::exit::{CliError, CliResult};
 use crate::table::Table;
 use akl_eval::plots::method_label;
 use akl_eval::records::write_records;
+use akl_eval::shards::{merge_studies, read_study};
 use akl_eval::study::{run_study, Executor, Study, StudyOptions, Trial};
 use akl_eval::summary::{
     summarize, Summary, TABLE_ORDER, THESIS_CONSTRAINT_ERRORS, THESIS_SUCCESS,
@@ -62,6 +63,9 @@ struct Evaluated<'a> {
 }
 
 pub(super) fn run(args: EvalArgs) -> CliResult {
+    if !args.merge.is_empty() {
+        return merge(&args);
+    }
     if args.participants == 0 {
         return Err(CliError::input("--participants: needs at least one"));
     }
@@ -73,6 +77,19 @@ pub(super) fn run(args: EvalArgs) -> CliResult {
     if let Some(dir) = &args.out {
         prepare_folder(dir)?;
     }
+    let only = match args.shard {
+        Some(request) => {
+            let shard = request
+                .resolve(|name| std::env::var(name).ok())
+                .map_err(CliError::input)?;
+            Some(
+                shard
+                    .nonempty_trials(args.participants)
+                    .map_err(|e| CliError::input(format!("--shard: {e}")))?,
+            )
+        }
+        None => None,
+    };
     let tasks: Vec<Task> = builtin::study_names()
         .into_iter()
         .map(builtin::resolve)
@@ -96,9 +113,10 @@ pub(super) fn run(args: EvalArgs) -> CliResult {
             .as_ref()
             .zip(args.execute)
             .map(|(s, n)| (s as &dyn Executor, n)),
+        only: only.clone(),
         stop: Some(crate::stop::on_ctrl_c()),
     };
-    let total = args.participants * 3 * tasks.len();
+    let total = only.as_ref().map_or(args.participants, |b| b.len()) * 3 * tasks.len();
     let bar = ProgressBar::new(total as u64).with_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} trials, {elapsed} ({eta} left)")
             .map_err(CliError::internal)?
@@ -110,9 +128,41 @@ pub(super) fn run(args: EvalArgs) -> CliResult {
     bar.finish_and_clear();
     let study = study.map_err(CliError::internal)?;
     let wall_s = started.elapsed().as_secs_f64();
-    let summary = summarize(&study.trials, &names);
+    report(&args, &study, &names, wall_s)?;
+    if study.interrupted {
+        return Err(CliError::interrupted(format!(
+            "interrupted: {} of {total} trials finished",
+            study.trials.len()
+        )));
+    }
+    Ok(())
+}
+
+/// `akl eval --merge PARTS...`: the shards of a study joined, and reported as a study.
+fn merge(args: &EvalArgs) -> CliResult {
+    if let Some(dir) = &args.out {
+        prepare_folder(dir)?;
+    }
+    let parts = args
+        .merge
+        .iter()
+        .map(|p| read_study(p).map(|s| (p.clone(), s)))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(CliError::input)?;
+    let study = merge_studies(&parts).map_err(CliError::input)?;
+    let names: Vec<String> = builtin::study_names()
+        .into_iter()
+        .map(str::to_string)
+        .collect();
+    report(args, &study, &names, 0.0)
+}
+
+/// Writes the records of `study` (with --out) and prints its tables (or, with --json, the
+/// study).
+fn report(args: &EvalArgs, study: &Study, names: &[String], wall_s: f64) -> CliResult {
+    let summary = summarize(&study.trials, names);
     let files = match &args.out {
-        Some(dir) => write_records(dir, &study, &summary, &names)
+        Some(dir) => write_records(dir, study, &summary, names)
             .map_err(CliError::internal)?
             .iter()
             .map(|p| p.display().to_string())
@@ -121,26 +171,20 @@ pub(super) fn run(args: EvalArgs) -> CliResult {
     };
     if args.json {
         print_json(&Evaluated {
-            participants: args.participants,
-            seed: args.seed,
+            participants: study.participants.len(),
+            seed: study.seed,
             interrupted: study.interrupted,
-            executions_per_spec: args.execute,
+            executions_per_spec: study.executions_per_spec,
             wall_s,
             files,
             summary: &summary,
             trials: study.trials.iter().collect(),
         })?;
     } else {
-        print_study(&study, &summary, wall_s);
+        print_study(study, &summary, wall_s);
         for f in &files {
             println!("wrote {f}");
         }
-    }
-    if study.interrupted {
-        return Err(CliError::interrupted(format!(
-            "interrupted: {} of {total} trials finished",
-            study.trials.len()
-        )));
     }
     Ok(())
 }
