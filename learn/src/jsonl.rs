@@ -79,45 +79,82 @@ pub enum Record {
     },
 }
 
-/// Parses the header line; the message says what is wrong.
-pub fn parse_header(line: &str) -> Result<DemoHeader, String> {
-    let header: DemoHeader = serde_json::from_str(line)
-        .map_err(|e| format!("not an `akl_demo` header: {}", plain(&e, line)))?;
+/// Why a line of a JSONL demonstration cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LineError {
+    /// The first line is not a header.
+    #[error("not an `akl_demo` header: {0}")]
+    NotHeader(String),
+    /// The header's version is not the one this build reads.
+    #[error("unsupported akl_demo version {0} (this build reads {DEMO_VERSION})")]
+    Version(u32),
+    /// The line is not JSON of a frame or an event (serde's message).
+    #[error("{0}")]
+    Json(String),
+    /// An event's time is NaN or infinite.
+    #[error("event time {0} is not finite")]
+    EventTime(f64),
+    /// An answer event without its answer.
+    #[error("an answer needs a `value` (yes, no or unknown)")]
+    AnswerWithoutValue,
+    /// A pose of the frame is not a pose (`ee` or `object `NAME``).
+    #[error("{what}: {source}")]
+    Pose {
+        /// Whose pose.
+        what: String,
+        /// What is wrong with it.
+        source: akl_tsr::PoseError,
+    },
+}
+
+impl From<LineError> for String {
+    fn from(e: LineError) -> String {
+        e.to_string()
+    }
+}
+
+/// Parses the header line; the error says what is wrong.
+pub fn parse_header(line: &str) -> Result<DemoHeader, LineError> {
+    let header: DemoHeader =
+        serde_json::from_str(line).map_err(|e| LineError::NotHeader(plain(&e, line)))?;
     if header.akl_demo != DEMO_VERSION {
-        return Err(format!(
-            "unsupported akl_demo version {} (this build reads {DEMO_VERSION})",
-            header.akl_demo
-        ));
+        return Err(LineError::Version(header.akl_demo));
     }
     Ok(header)
 }
 
-/// Parses a frame or event line; the message says what is wrong.
-pub fn parse_record(line: &str) -> Result<Record, String> {
-    let value: serde_json::Value = serde_json::from_str(line).map_err(|e| plain(&e, line))?;
+/// Parses a frame or event line; the error says what is wrong.
+pub fn parse_record(line: &str) -> Result<Record, LineError> {
+    let value: serde_json::Value =
+        serde_json::from_str(line).map_err(|e| LineError::Json(plain(&e, line)))?;
     if value.get("event").is_some() {
-        let event: EventLine = serde_json::from_value(value).map_err(|e| e.to_string())?;
+        let event: EventLine =
+            serde_json::from_value(value).map_err(|e| LineError::Json(e.to_string()))?;
         if !event.t.is_finite() {
-            return Err(format!("event time {} is not finite", event.t));
+            return Err(LineError::EventTime(event.t));
         }
         let kind = match (event.event, event.value) {
             (EventName::Answer, Some(a)) => DialogueKind::Answer(a),
-            (EventName::Answer, None) => {
-                return Err("an answer needs a `value` (yes, no or unknown)".into())
-            }
+            (EventName::Answer, None) => return Err(LineError::AnswerWithoutValue),
             (EventName::Query, _) => DialogueKind::Query,
             (EventName::Suggestion, _) => DialogueKind::Suggestion,
             (EventName::Keyframe, _) => DialogueKind::Keyframe,
         };
         return Ok(Record::Event { t: event.t, kind });
     }
-    let frame: FrameLine = serde_json::from_value(value).map_err(|e| e.to_string())?;
-    let ee = frame.ee.to_pose().map_err(|e| format!("ee: {e}"))?;
+    let frame: FrameLine =
+        serde_json::from_value(value).map_err(|e| LineError::Json(e.to_string()))?;
+    let ee = frame.ee.to_pose().map_err(|source| LineError::Pose {
+        what: "ee".into(),
+        source,
+    })?;
     let mut objects = Vec::with_capacity(frame.objects.len());
     for (name, pose) in frame.objects {
-        let pose = pose
-            .to_pose()
-            .map_err(|e| format!("object `{name}`: {e}"))?;
+        let pose = pose.to_pose().map_err(|source| LineError::Pose {
+            what: format!("object `{name}`"),
+            source,
+        })?;
         objects.push((name, pose));
     }
     Ok(Record::Frame {
@@ -138,14 +175,17 @@ pub fn read_jsonl(text: &str) -> Result<Demo, DemoError> {
     let (_, first) = lines.next().ok_or(DemoError::Format(
         "the file is empty: expected an `akl_demo` header line".into(),
     ))?;
-    let header = parse_header(first).map_err(|message| DemoError::Line { line: 1, message })?;
+    let header = parse_header(first).map_err(|e| DemoError::Line {
+        line: 1,
+        message: e.into(),
+    })?;
     let mut builder = DemoBuilder::new(header);
     for (index, line) in lines {
         let at = |message: String| DemoError::Line {
             line: index + 1,
             message,
         };
-        match parse_record(line).map_err(at)? {
+        match parse_record(line).map_err(|e| at(e.into()))? {
             Record::Frame {
                 t,
                 ee,

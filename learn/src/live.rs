@@ -117,7 +117,7 @@ impl<R: BufRead> LiveStream<R> {
         let Some(line) = self.next_line()? else {
             return Ok(None);
         };
-        match parse_record(line).map_err(|m| self.error(m))? {
+        match parse_record(line).map_err(|e| self.error(e.into()))? {
             Record::Frame {
                 t,
                 ee,
@@ -126,7 +126,9 @@ impl<R: BufRead> LiveStream<R> {
                 constrained: _,
             } => {
                 let names: Vec<&str> = objects.iter().map(|(n, _)| n.as_str()).collect();
-                self.checker.check(t, &names).map_err(|m| self.error(m))?;
+                self.checker
+                    .check(t, &names)
+                    .map_err(|e| self.error(e.into()))?;
                 let poses = objects.into_iter().map(|(_, p)| p).collect();
                 Ok(Some(Item::Frame(Frame {
                     t,
@@ -149,7 +151,7 @@ impl<R: BufRead> LiveStream<R> {
     /// Reads the header and the first frame.
     pub fn start(&mut self) -> Result<LiveStart, LiveError> {
         let header = match self.next_line()? {
-            Some(line) => parse_header(line).map_err(|m| self.error(m))?,
+            Some(line) => parse_header(line).map_err(|e| self.error(e.into()))?,
             None => return Err(LiveError::NoFrames),
         };
         match self.next_item()? {

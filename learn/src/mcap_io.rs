@@ -370,9 +370,10 @@ pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> 
         }
         let t = t_ns as f64 / 1e9;
         let names: Vec<&str> = object_names.iter().map(String::as_str).collect();
-        checker
-            .check(t, &names)
-            .map_err(|message| DemoError::Frame { frame: i, message })?;
+        checker.check(t, &names).map_err(|e| DemoError::Frame {
+            frame: i,
+            message: e.into(),
+        })?;
         demo.times.push(t);
         demo.ee.push(frame.ee.expect("checked complete"));
         demo.gripper.push(frame.gripper.expect("checked complete"));

@@ -127,9 +127,9 @@ impl<'a> TeachingSession<'a> {
         }
         self.checker
             .check(t, &names)
-            .map_err(|message| SessionError::Frame {
+            .map_err(|e| SessionError::Frame {
                 frame: index,
-                message,
+                message: e.into(),
             })?;
         self.demo.times.push(t);
         self.demo.ee.push(ee);
