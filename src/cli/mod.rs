@@ -82,7 +82,14 @@ pub(crate) enum Command {
     ///
     /// Ctrl-C (SIGINT) or SIGTERM stops starting trials: the trials under way finish, the
     /// summary of the finished ones is printed and the report written with "interrupted":
-    /// true (no trace); a second signal exits at once.
+    /// true (no trace); a second signal exits at once; --resume REPORT runs only the trials it
+    /// lacks.
+    ///
+    /// On a cluster: --shard I/N runs block I (from 0) of N of the trials, with the seeds they
+    /// have in a single run (--shard auto reads a Slurm job array's or, as auto/N, a Kubernetes
+    /// Indexed Job's index), and `akl report merge` joins the shards' reports into the report
+    /// of the whole run (README, "Clusters and CI"); --junit FILE writes one test case per
+    /// trial for CI systems.
     ///
     /// Exit codes: 0 every trial passed; 1 some trial failed (or an output cannot be written);
     /// 2 bad input (a missing or invalid spec file, an unknown task, a spec naming objects the
