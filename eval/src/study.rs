@@ -259,9 +259,11 @@ pub fn run_study(
 
 /// The participant's calibration from its own line and circle (thesis §4.4).
 fn calibrate(p: &Participant) -> Calibrated {
-    let fitted = calibration_demos(&p.profile, p.seed).and_then(|(line, circle)| {
-        Calibration::fit(&Motion::of(&line), &Motion::of(&circle)).map_err(|e| e.to_string())
-    });
+    let fitted = calibration_demos(&p.profile, p.seed)
+        .map_err(|e| e.to_string())
+        .and_then(|(line, circle)| {
+            Calibration::fit(&Motion::of(&line), &Motion::of(&circle)).map_err(|e| e.to_string())
+        });
     match fitted {
         Ok(calibration) => Calibrated {
             participant: p.id,

@@ -186,6 +186,18 @@ pub enum CalibrationError {
     /// A calibration file is malformed.
     #[error("{0}")]
     Invalid(String),
+    /// The file's version is not the one this build reads.
+    #[error("unsupported akl_calibration version {0} (this build reads {CALIBRATION_VERSION}: the detector's signal changed, so calibrate again with `akl calibrate`)")]
+    Version(u32),
+    /// The detector's window is outside what it supports.
+    #[error("window {0} is outside 1..={max}", max = Sampling::MAX_WINDOW)]
+    Window(u32),
+    /// The logistic model's coefficients are unusable.
+    #[error("beta1 must be positive and beta0 finite")]
+    Coefficients,
+    /// The tank, filter or smoothing parameters are unusable.
+    #[error("0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0, filter_distance > 0 and 0 ≤ smoothing ≤ 1 s are required")]
+    Tank,
 }
 
 /// Fewest distance errors per demonstration for a meaningful fit.
@@ -335,28 +347,20 @@ impl Calibration {
         })?;
         calibration
             .validate()
-            .map_err(|m| CalibrationError::Invalid(format!("{}: {m}", path.display())))?;
+            .map_err(|e| CalibrationError::Invalid(format!("{}: {e}", path.display())))?;
         Ok(calibration)
     }
 
     /// Checks the version and that every parameter is usable.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), CalibrationError> {
         if self.akl_calibration != CALIBRATION_VERSION {
-            return Err(format!(
-                "unsupported akl_calibration version {} (this build reads {CALIBRATION_VERSION}: \
-                 the detector's signal changed, so calibrate again with `akl calibrate`)",
-                self.akl_calibration
-            ));
+            return Err(CalibrationError::Version(self.akl_calibration));
         }
         if !(1..=Sampling::MAX_WINDOW).contains(&self.window) {
-            return Err(format!(
-                "window {} is outside 1..={}",
-                self.window,
-                Sampling::MAX_WINDOW
-            ));
+            return Err(CalibrationError::Window(self.window));
         }
         if !self.beta1.is_finite() || self.beta1 <= 0.0 || !self.beta0.is_finite() {
-            return Err("beta1 must be positive and beta0 finite".into());
+            return Err(CalibrationError::Coefficients);
         }
         let usable = (0.0..1.0).contains(&self.tank_dissipation)
             && self.tank_threshold > 0.0
@@ -364,10 +368,7 @@ impl Calibration {
             && self.filter_distance > 0.0
             && (0.0..=1.0).contains(&self.smoothing);
         if !usable {
-            return Err(
-                "0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0, filter_distance > 0 and 0 ≤ smoothing ≤ 1 s are required"
-                    .into(),
-            );
+            return Err(CalibrationError::Tank);
         }
         Ok(())
     }
@@ -553,6 +554,6 @@ mod tests {
             tank_dissipation: 1.0,
             ..Calibration::default()
         };
-        assert!(leaky.validate().is_err());
+        assert_eq!(leaky.validate(), Err(CalibrationError::Tank));
     }
 }

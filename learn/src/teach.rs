@@ -15,7 +15,7 @@ use crate::calibration::Calibration;
 use crate::demo::{Demo, DemoHeader};
 use crate::dialogue::{AnswerSource, Oracle};
 use crate::session::{RecordingSink, SessionError, TeachingSession};
-use crate::teacher::{SimulatedDemo, SimulatedTeacher, TeacherProfile};
+use crate::teacher::{SimulatedDemo, SimulatedTeacher, TeacherError, TeacherProfile};
 
 /// How long after a required line ends the oracle still answers "yes" (s): the detector
 /// switches up to a few filter steps late, and a person remembers the line they just made.
@@ -169,8 +169,8 @@ pub fn stream_demo(
 #[derive(Debug, thiserror::Error)]
 pub enum SimulatedTeachingError {
     /// The task's teaching steps do not fit the world (the message names the step).
-    #[error("{0}")]
-    Teacher(String),
+    #[error(transparent)]
+    Teacher(#[from] TeacherError),
     /// The session failed (no answer to a query, the recording could not be written).
     #[error(transparent)]
     Session(#[from] SessionError),

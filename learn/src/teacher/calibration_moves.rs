@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
-use super::profile::TeacherProfile;
+use super::profile::{TeacherError, TeacherProfile};
 use crate::demo::{Demo, DemoHeader};
 
 /// Length of the calibration line (m): ten filtered points' worth of errors at D_F = 5 cm.
@@ -25,7 +25,10 @@ const CENTRE: [f64; 3] = [0.45, 0.0, 0.3];
 
 /// The line and circle demonstrations of a simulated teacher with `profile`; `seed` fixes the
 /// noise and the speed variation.
-pub fn calibration_demos(profile: &TeacherProfile, seed: u64) -> Result<(Demo, Demo), String> {
+pub fn calibration_demos(
+    profile: &TeacherProfile,
+    seed: u64,
+) -> Result<(Demo, Demo), TeacherError> {
     calibration_demos_with(profile, seed, CIRCLE_RADIUS)
 }
 
@@ -34,10 +37,10 @@ pub fn calibration_demos_with(
     profile: &TeacherProfile,
     seed: u64,
     radius: f64,
-) -> Result<(Demo, Demo), String> {
+) -> Result<(Demo, Demo), TeacherError> {
     profile.validate()?;
     if !(radius.is_finite() && radius > 0.0) {
-        return Err(format!("circle radius {radius} m is not positive"));
+        return Err(TeacherError::Radius(radius));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let centre = Vector3::from(CENTRE);

@@ -14,5 +14,5 @@ pub use calibration_moves::{
     calibration_demos, calibration_demos_with, CIRCLE_RADIUS, LINE_LENGTH,
 };
 pub use motion::{min_jerk, Noise};
-pub use profile::{KeyframeHabit, TeacherProfile};
+pub use profile::{KeyframeHabit, TeacherError, TeacherProfile};
 pub use simulate::{demonstrate, SimulatedDemo, SimulatedTeacher};

@@ -55,6 +55,49 @@ pub struct TeacherProfile {
 /// Highest supported recording rate (Hz).
 pub(super) const MAX_RATE: f64 = 1000.0;
 
+/// Why a simulated teacher cannot demonstrate: a profile parameter out of range, or a
+/// teaching step the world cannot support.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TeacherError {
+    /// A parameter that is a probability lies outside [0, 1].
+    #[error("{name} = {value} is not a probability")]
+    NotProbability {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The speed is not positive or its variation not in [0, 1).
+    #[error("speed must be positive and speed_variation in [0, 1)")]
+    Speed,
+    /// The recording rate is outside (0, MAX_RATE].
+    #[error("rate {0} Hz is outside (0, {MAX_RATE}]")]
+    Rate(f64),
+    /// A tremor, noise, curvature, dwell or keyframe habit is negative or not a number.
+    #[error("tremor, sensor_noise, curvature, dwell and keyframes.extra_per_step must be ≥ 0")]
+    Negative,
+    /// The calibration circle's radius is not positive.
+    #[error("circle radius {0} m is not positive")]
+    Radius(f64),
+    /// A teaching step names an object the world lacks or cannot be followed.
+    #[error("teaching.steps[{index}] ({step}): {problem}")]
+    Step {
+        /// Index of the step.
+        index: usize,
+        /// The step, described.
+        step: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl From<TeacherError> for String {
+    fn from(e: TeacherError) -> String {
+        e.to_string()
+    }
+}
+
 impl TeacherProfile {
     /// The careful teacher: no unintended lines, correct answers, marks every keyframe the task
     /// needs and no other. Noise of a steady hand (1 mm tremor, 0.5 mm sensor noise).
@@ -128,7 +171,7 @@ impl TeacherProfile {
     pub const NAMES: [&'static str; 4] = ["default", "careful", "novice", "straight"];
 
     /// Checks that every parameter is in range.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), TeacherError> {
         let probabilities = [
             ("unintended_line_chance", self.unintended_line_chance),
             ("suggestion_uptake", self.suggestion_uptake),
@@ -137,14 +180,14 @@ impl TeacherProfile {
             ("keyframes.miss_chance", self.keyframes.miss_chance),
             ("keyframes.free_move_mark", self.keyframes.free_move_mark),
         ];
-        if let Some((name, v)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
-            return Err(format!("{name} = {v} is not a probability"));
+        if let Some(&(name, value)) = probabilities.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
+            return Err(TeacherError::NotProbability { name, value });
         }
         if self.speed.is_nan() || self.speed <= 0.0 || !(0.0..1.0).contains(&self.speed_variation) {
-            return Err("speed must be positive and speed_variation in [0, 1)".into());
+            return Err(TeacherError::Speed);
         }
         if self.rate.is_nan() || self.rate <= 0.0 || self.rate > MAX_RATE {
-            return Err(format!("rate {} Hz is outside (0, {MAX_RATE}]", self.rate));
+            return Err(TeacherError::Rate(self.rate));
         }
         if [
             self.tremor,
@@ -156,10 +199,7 @@ impl TeacherProfile {
         .iter()
         .any(|v| !v.is_finite() || *v < 0.0)
         {
-            return Err(
-                "tremor, sensor_noise, curvature, dwell and keyframes.extra_per_step must be ≥ 0"
-                    .into(),
-            );
+            return Err(TeacherError::Negative);
         }
         Ok(())
     }

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::motion::{min_jerk, Noise};
-use super::profile::TeacherProfile;
+use super::profile::{TeacherError, TeacherProfile};
 use crate::demo::{Demo, DemoHeader, DialogueEvent, DialogueKind};
 
 /// Fastest hand rotation the simulated teacher makes (rad/s).
@@ -86,7 +86,7 @@ pub fn demonstrate(
     world: &World,
     profile: &TeacherProfile,
     seed: u64,
-) -> Result<SimulatedDemo, String> {
+) -> Result<SimulatedDemo, TeacherError> {
     let mut teacher = SimulatedTeacher::new(task, world, profile, seed)?;
     while teacher.next_step()? {}
     Ok(teacher.finish())
@@ -108,7 +108,7 @@ impl<'a> SimulatedTeacher<'a> {
         world: &World,
         profile: &'a TeacherProfile,
         seed: u64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, TeacherError> {
         profile.validate()?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let noise = Noise::new(profile.tremor, profile.sensor_noise, &mut rng);
@@ -148,7 +148,7 @@ impl<'a> SimulatedTeacher<'a> {
 
     /// Records the next teaching step (after the last one, the closing dwell); false once
     /// everything is recorded. The error names a step the world cannot support.
-    pub fn next_step(&mut self) -> Result<bool, String> {
+    pub fn next_step(&mut self) -> Result<bool, TeacherError> {
         let steps = &self.task.teaching.steps;
         let profile = self.recorder.profile;
         let Some(step) = steps.get(self.next) else {
@@ -162,7 +162,11 @@ impl<'a> SimulatedTeacher<'a> {
         let i = self.next;
         self.next += 1;
         let recorder = &mut self.recorder;
-        let at = |e: String| format!("teaching.steps[{i}] ({}): {e}", step.describe());
+        let at = |problem: String| TeacherError::Step {
+            index: i,
+            step: step.describe(),
+            problem,
+        };
         let target = recorder.target(step).map_err(at)?;
         let path = match step {
             TeachStep::Line { .. } => Path::Straight { intended: true },
