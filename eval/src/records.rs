@@ -12,6 +12,7 @@ use crate::summary::Summary;
 
 /// Why the records could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RecordError {
     /// A file could not be written.
     #[error("{path}: {source}")]

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 /// Why shards of a study cannot be read or joined; every variant names the part.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum StudyMergeError {
     /// No part given.
     #[error("no studies to merge")]

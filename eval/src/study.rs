@@ -54,6 +54,7 @@ pub struct StudyOptions<'a> {
 
 /// Why a study could not run.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum StudyError {
     /// No participants or no tasks.
     #[error("a study needs at least one participant and one task")]

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 /// Why execution could not run or could not write its outputs.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ExecError {
     /// The robot could not be loaded.
     #[error("robot: {0}")]

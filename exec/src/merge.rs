@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 /// Why reports cannot be read, merged or resumed. Every variant names the part.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum MergeError {
     /// No part given.
     #[error("no reports to merge")]

@@ -21,6 +21,7 @@ pub struct Shard {
 
 /// Why a shard cannot be chosen.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ShardError {
     /// The text is not `I/N`, `auto` or `auto/N`.
     #[error("`{0}` is not a shard: expected I/N (shard I of N, from 0), `auto` or `auto/N`")]

@@ -162,6 +162,7 @@ pub struct Separation {
 
 /// Why calibration failed.
 #[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
 pub enum CalibrationError {
     /// A demonstration is too short to give distance errors.
     #[error("the {which} demonstration is too short: {points} distance errors after the {filter} m filter (need at least {needed})")]

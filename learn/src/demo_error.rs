@@ -4,6 +4,7 @@ use thiserror::Error;
 
 /// A demonstration that is malformed, with the line (JSONL) or frame where it went wrong.
 #[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
 pub enum DemoError {
     /// A JSONL line is malformed or breaks a rule of the format.
     #[error("line {line}: {message}")]

@@ -118,6 +118,7 @@ fn answer_word(answer: Answer) -> &'static str {
 
 /// Why an answer could not be had.
 #[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
 pub enum DialogueError {
     /// A question had no answer in the list: the list is too short, or (keyed by time) has
     /// none near the question's time. Later questions depend on this answer, so they are not

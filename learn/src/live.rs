@@ -18,6 +18,7 @@ use crate::validate::FrameChecker;
 
 /// Why a live stream could not be taught from.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LiveError {
     /// A line is malformed or breaks a rule of the format.
     #[error("line {line}: {message}")]

@@ -37,6 +37,7 @@ impl DemoFormat {
 
 /// Why a demonstration file could not be read or written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DemoFileError {
     /// The file could not be opened, read or written.
     #[error("{path}: {source}")]

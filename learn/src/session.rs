@@ -36,6 +36,7 @@ pub fn write_demo(sink: &mut dyn RecordingSink, demo: &Demo) -> std::io::Result<
 
 /// What went wrong in a session.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SessionError {
     /// A frame broke a rule of the format.
     #[error("frame {frame}: {message}")]

@@ -167,6 +167,7 @@ pub fn stream_demo(
 
 /// Why a simulated teacher could not teach.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SimulatedTeachingError {
     /// The task's teaching steps do not fit the world (the message names the step).
     #[error(transparent)]

@@ -24,6 +24,7 @@ use thiserror::Error;
 
 /// A mesh that cannot be used, naming its file.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum MeshError {
     /// The file cannot be read or parsed.
     #[error("{path}: {problem}")]

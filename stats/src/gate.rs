@@ -66,6 +66,7 @@ impl Default for GateOptions {
 
 /// A gate that cannot be built.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum GateError {
     /// A probability outside (0, 1).
     #[error("{name} must be between 0 and 1 (exclusive), not {value}")]

@@ -7,6 +7,7 @@ use akl_planner::flexibility::FlexibilityError;
 
 /// What stopped a command of this crate.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ValidateError {
     /// The trials could not run (a spec that does not fit the task, a layout that cannot be
     /// drawn, a bad option).

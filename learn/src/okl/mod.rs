@@ -36,6 +36,7 @@ use segment::{constrained_regions, modify_detected_constraints, segment_trajecto
 
 /// Why a spec could not be learned from a demo.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum LearnError {
     /// The demo has no frames.
     #[error("the demonstration has no frames")]

@@ -47,6 +47,7 @@ pub use gains::{planner_gains, GainOptions, Gains};
 
 /// Why a spec's flexibility cannot be measured.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum FlexibilityError {
     /// The spec cannot be grounded in the task's world.
     #[error("{0}")]
