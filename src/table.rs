@@ -55,3 +55,14 @@ impl Table {
 pub(crate) fn vec3(v: &akl_tsr::nalgebra::Vector3<f64>) -> String {
     format!("[{:.3}, {:.3}, {:.3}]", v.x, v.y, v.z)
 }
+
+/// A duration given in seconds, in the unit that reads best (µs, ms or s).
+pub(crate) fn seconds(s: f64) -> String {
+    if s < 1e-3 {
+        format!("{:.1} µs", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
+}

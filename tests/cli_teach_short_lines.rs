@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{akl_in, json, scratch, stderr, stdout};
+use common::{akl_in, frames_only, json, scratch, stderr, stdout};
 use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -86,21 +86,6 @@ fn teach_sim(dir: &Path, kind: &str, out: &str) -> serde_json::Value {
     let o = akl_in(dir, &["teach", "--task", &task, "-o", out, "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     json(&o)
-}
-
-/// The frames and keyframe marks of a recording, as a robot driver streams them.
-fn frames_only(recording: &str) -> String {
-    recording
-        .lines()
-        .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
-        .map(|l| {
-            format!(
-                "{}\n",
-                l.replace(",\"constrained\":true", "")
-                    .replace(",\"constrained\":false", "")
-            )
-        })
-        .collect()
 }
 
 /// `akl teach --teacher stdin --task <kind>.json --answers answers -o out --json` fed `stream`.

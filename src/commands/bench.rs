@@ -6,7 +6,7 @@ use super::robot::load;
 use crate::cli::{BenchCommand, BenchPlanningArgs};
 use crate::exit::{CliError, CliResult, INTERNAL};
 use crate::progress::Progress;
-use crate::table::Table;
+use crate::table::{seconds, Table};
 use akl_planner::benchmark::{
     compare, run_problem, summarize, BenchSettings, ProblemFile, ProblemOutcome, ProblemRecord,
     Times,
@@ -200,15 +200,7 @@ fn times_cells(times: Option<Times>) -> Vec<String> {
     }
 }
 
-/// A time in nanoseconds, in the unit that reads best.
+/// A time in nanoseconds as [`seconds`] writes it.
 fn duration(ns: f64) -> String {
-    if ns < 1e3 {
-        format!("{ns:.0} ns")
-    } else if ns < 1e6 {
-        format!("{:.1} µs", ns / 1e3)
-    } else if ns < 1e9 {
-        format!("{:.2} ms", ns / 1e6)
-    } else {
-        format!("{:.2} s", ns / 1e9)
-    }
+    seconds(ns / 1e9)
 }

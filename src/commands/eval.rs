@@ -4,7 +4,7 @@ use super::print_json;
 use super::robot::load as load_robot;
 use crate::cli::{EvalArgs, RobotArg};
 use crate::exit::{CliError, CliResult};
-use crate::table::Table;
+use crate::table::{seconds, Table};
 use akl_eval::plots::method_label;
 use akl_eval::records::write_records;
 use akl_eval::shards::{merge_studies, read_study};
@@ -280,15 +280,5 @@ fn print_study(study: &Study, summary: &Summary, wall_s: f64) {
             t.row(cells);
         }
         print!("{}", t.render());
-    }
-}
-
-fn seconds(s: f64) -> String {
-    if s < 1e-3 {
-        format!("{:.1} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
     }
 }

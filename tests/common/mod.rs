@@ -98,8 +98,13 @@ pub(crate) fn driver_stream(dir: &Path, task: &str) -> String {
         ],
     );
     assert!(o.status.success(), "{}", text(&o.stderr));
-    std::fs::read_to_string(dir.join("src.jsonl"))
-        .unwrap()
+    frames_only(&std::fs::read_to_string(dir.join("src.jsonl")).unwrap())
+}
+
+/// The frames and keyframe marks of a recording, as a robot driver streams them: without the
+/// detector states and the dialogue.
+pub(crate) fn frames_only(recording: &str) -> String {
+    recording
         .lines()
         .filter(|l| !l.contains("\"event\"") || l.contains("\"keyframe\""))
         .map(|l| {
