@@ -527,6 +527,7 @@ fn bench_planning_refuses_bad_problem_files_naming_the_problem() {
     let file = problems.to_str().unwrap();
     for (args, expected) in [
         (vec!["--seeds", "0"], "--seeds"),
+        (vec!["--max-iterations", "0"], "--max-iterations"),
         (vec!["--set", "nothing"], "--set nothing"),
         (
             vec!["--against", "/nonexistent/peer.json"],

@@ -208,3 +208,57 @@ fn grasped(robot: &Robot, checker: &Checker, q: &[f64], width: f64) -> Vec<Strin
 fn nanos(since: Instant) -> u64 {
     u64::try_from(since.elapsed().as_nanos()).unwrap_or(u64::MAX)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// A file of one problem from the ready pose back to it, in a scene of one cube of half
+    /// side `half` at `at` (robot base frame).
+    fn file(at: [f64; 3], half: f64, ready: &[f64]) -> ProblemFile {
+        let q = format!("{ready:?}");
+        let text = format!(
+            r#"{{"scenes": {{"s": [{{"name": "cube", "kind": "box", "position": {at:?},
+                 "half_extents": [{half}, {half}, {half}]}}]}},
+                 "problems": [{{"set": "a", "id": "a/1", "scene": "s", "start": {q}, "goal": {q}}}]}}"#
+        );
+        ProblemFile::parse(&text, Path::new("p.json"), ready.len()).unwrap()
+    }
+
+    /// A cube between the open fingers (9 cm wide, so it meets them) is taken as grasped and
+    /// the problem stays valid; a cube at the elbow makes it invalid, naming the link.
+    #[test]
+    fn only_what_the_hand_alone_touches_counts_as_grasped() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let ready = robot.ready().to_vec();
+        let settings = BenchSettings {
+            seeds: 1,
+            rrt: RrtOptions::default(),
+        };
+        let tcp = robot.tcp_pose(&ready).translation.vector;
+        let between = file([tcp.x, tcp.y, tcp.z], 0.045, &ready);
+        let o = run_problem(&robot, &model, &between, &between.problems[0], &settings);
+        assert_eq!(o.grasped, ["cube"]);
+        assert!(o.record.start_valid && o.record.goal_valid, "{o:?}");
+        assert!(o.record.runs[0].found);
+        let elbow = robot.link_poses(&ready, robot.open_width())[robot
+            .links()
+            .iter()
+            .position(|l| l.name == "fer_link4")
+            .unwrap()]
+        .translation
+        .vector;
+        let arm = file([elbow.x, elbow.y, elbow.z], 0.01, &ready);
+        let o = run_problem(&robot, &model, &arm, &arm.problems[0], &settings);
+        assert!(o.grasped.is_empty());
+        assert!(!o.record.start_valid && o.record.runs.is_empty());
+        assert!(
+            matches!(&o.start_hit, Some(Hit::World(link, object))
+                if ["fer_link3", "fer_link4"].contains(&link.as_str()) && object == "cube"),
+            "{:?}",
+            o.start_hit
+        );
+    }
+}
