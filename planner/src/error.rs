@@ -6,6 +6,14 @@ use std::path::PathBuf;
 #[non_exhaustive]
 #[derive(Debug, thiserror::Error)]
 pub enum RobotError {
+    /// The simulation cannot drive the robot's gripper.
+    #[error("{}: [gripper]: {source}", path.display())]
+    Gripper {
+        /// The `robot.toml` whose gripper it is.
+        path: PathBuf,
+        /// Why.
+        source: GripperError,
+    },
     /// A file of the robot folder could not be read.
     #[error("{}: cannot read: {source}", path.display())]
     Io {
@@ -39,6 +47,24 @@ pub enum RobotError {
         /// Each mesh that failed.
         failures: Vec<MeshFailure>,
     },
+}
+
+/// Why the simulation cannot drive a robot's gripper; the robot is refused when loaded.
+#[non_exhaustive]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum GripperError {
+    /// The opening moves other than two finger joints.
+    #[error("the gripper moves {} joint(s) ({}): the simulation drives exactly two prismatic fingers (list them in [gripper] joints, or one of them when the other mimics it)", .0.len(), .0.join(", "))]
+    FingerCount(Vec<String>),
+    /// A finger joint turns: a linkage gripper.
+    #[error("gripper joint `{0}` is not prismatic: linkage grippers (revolute knuckles, such as the Robotiq 2F-85's) cannot be simulated yet; the simulation drives two prismatic fingers")]
+    NotPrismatic(String),
+    /// The two fingers are not both mounted on one link by parallel slides.
+    #[error("the two finger joints must slide along one axis on one hand link")]
+    TwoHands,
+    /// A finger link has no primitive collision element to make its pad from.
+    #[error("finger link `{0}` has no primitive collision element (box, cylinder, sphere) to grasp with: the simulation makes the finger's pad from the element reaching furthest towards the other finger")]
+    NoPad(String),
 }
 
 /// One mesh of a URDF that cannot be used.
@@ -102,6 +128,9 @@ pub enum UrdfError {
     /// No joint between the base and the TCP moves.
     #[error("no movable joint between the base and `{0}`")]
     NoArmJoint(String),
+    /// Several of the problems above, every one found in the file.
+    #[error("{} problems:{}", .0.len(), .0.iter().map(|p| format!("\n  {p}")).collect::<String>())]
+    Several(Vec<UrdfError>),
     /// A collision element has a size of zero or less.
     #[error("link `{link}`: collision geometry {geometry} has a non-positive size")]
     Geometry {
@@ -178,9 +207,6 @@ pub enum PandaIkError {
     /// Fewer than seven joints lie between the base and the TCP.
     #[error("the TCP is not seven joints away from the base")]
     ShortChain,
-    /// Fixed joints before joint 1 move the base.
-    #[error("the fixed joints before joint 1 (up to `{0}`) move the base; the panda solver needs them to be identities")]
-    MovedBase(String),
     /// An arm joint differs from the Panda's.
     #[error("joint `{joint}` (joint {}): {problem}", index + 1)]
     Joint {

@@ -79,31 +79,102 @@ pub struct Kinematics {
     arm_links: Vec<usize>,
 }
 
-/// Joint names and limits of the arm, as the compiler found them.
+/// Joint names and limits of the arm, as the compiler found them, and the gripper's joints.
 #[derive(Debug, Clone)]
 pub struct ArmJoints {
     /// Names, base to tip.
     pub names: Vec<String>,
-    /// `[lower, upper]` limits.
+    /// `[lower, upper]` limits; a continuous joint's are [`CONTINUOUS_RANGE`].
     pub limits: Vec<[f64; 2]>,
     /// Whether each is revolute (else prismatic).
     pub revolute: Vec<bool>,
+    /// Whether each is continuous (a URDF `continuous` joint: it turns without end).
+    pub continuous: Vec<bool>,
+    /// Every joint the opening width moves: the gripper joints `robot.toml` lists, then the
+    /// joints that mimic one of them and are not listed.
+    pub fingers: Vec<String>,
 }
 
 /// Mimic relations read from the URDF: joint → (followed joint, multiplier, offset).
 pub type Mimics = BTreeMap<String, (String, f64, f64)>;
 
+/// The range planned over for a continuous joint: a turn either way of zero (as UR's own
+/// descriptions bound their joints), so that every angle lies in it twice and from anywhere
+/// in it every angle is within half a turn. The joint itself has no limit: inverse
+/// kinematics answers the turn nearest its seed, and `akl robot info` marks the joint
+/// continuous.
+pub const CONTINUOUS_RANGE: [f64; 2] = [-std::f64::consts::TAU, std::f64::consts::TAU];
+
+/// How far a joint may move, as its URDF says.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointRange {
+    /// A revolute or prismatic joint's `<limit lower upper>`.
+    Bounded([f64; 2]),
+    /// A continuous joint: no limit.
+    Continuous,
+}
+
+/// What the URDF says about its joints that k's tree drops: mimic relations and ranges
+/// (k reads a revolute joint whose limits are equal as unlimited, and a continuous joint
+/// with a `<limit>` as limited).
+#[derive(Debug, Clone, Default)]
+pub struct UrdfJoints {
+    /// Mimic relations.
+    pub mimics: Mimics,
+    /// The range of every movable joint, by name.
+    pub ranges: BTreeMap<String, JointRange>,
+}
+
+impl UrdfJoints {
+    /// Reads the mimic relations and ranges of a URDF's joints.
+    pub fn of(urdf: &urdf_rs::Robot) -> UrdfJoints {
+        let mut out = UrdfJoints::default();
+        for j in &urdf.joints {
+            if let Some(m) = &j.mimic {
+                out.mimics.insert(
+                    j.name.clone(),
+                    (
+                        m.joint.clone(),
+                        m.multiplier.unwrap_or(1.0),
+                        m.offset.unwrap_or(0.0),
+                    ),
+                );
+            }
+            let range = match j.joint_type {
+                urdf_rs::JointType::Continuous => JointRange::Continuous,
+                urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic => {
+                    JointRange::Bounded([j.limit.lower, j.limit.upper])
+                }
+                _ => continue,
+            };
+            out.ranges.insert(j.name.clone(), range);
+        }
+        out
+    }
+
+    /// The range a joint is planned over (see [`CONTINUOUS_RANGE`]); `None` for a fixed or
+    /// unknown joint.
+    fn planned_range(&self, name: &str) -> Option<[f64; 2]> {
+        self.ranges.get(name).map(|r| match r {
+            JointRange::Bounded(limits) => *limits,
+            JointRange::Continuous => CONTINUOUS_RANGE,
+        })
+    }
+}
+
 impl Kinematics {
     /// Compiles the k tree. The arm joints are the movable joints from the base to `tcp_link`
-    /// that are not gripper joints; gripper joints follow the opening width (each moves
-    /// `width / gripper_joints.len()`); mimic joints follow their source; other joints stay at
-    /// the position nearest zero within their limits.
+    /// that are not gripper joints; gripper joints and the joints mimicking them follow the
+    /// opening width (each of the n moves `width / n`, times its mimic multiplier); other
+    /// mimic joints follow their source; other joints stay at the position nearest zero
+    /// within their limits.
     pub fn compile(
         chain: &k::Chain<f64>,
         tcp_link: &str,
         gripper_joints: &[String],
-        mimics: &Mimics,
+        joints: &UrdfJoints,
     ) -> Result<(Kinematics, ArmJoints), UrdfError> {
+        let mimics = &joints.mimics;
         let nodes: Vec<&k::Node<f64>> = chain.iter().collect();
         let mut parents = Vec::with_capacity(nodes.len());
         for node in &nodes {
@@ -142,32 +213,43 @@ impl Kinematics {
                 });
             }
         }
+        let mut fingers = gripper_joints.to_vec();
+        for node in &nodes {
+            let name = &node.joint().name;
+            let follows = mimics.get(name).map(|(source, ..)| source);
+            if follows.is_some_and(|s| gripper_joints.contains(s)) && !fingers.contains(name) {
+                fingers.push(name.clone());
+            }
+        }
         let mut arm = ArmJoints {
             names: Vec::new(),
             limits: Vec::new(),
             revolute: Vec::new(),
+            continuous: Vec::new(),
+            fingers,
         };
         for &i in &tcp_path {
             let joint = nodes[i].joint();
             let movable = !matches!(joint.joint_type, k::JointType::Fixed);
             if movable && !gripper_joints.contains(&joint.name) && !mimics.contains_key(&joint.name)
             {
-                let limits = joint
-                    .limits
-                    .as_ref()
-                    .map_or([-std::f64::consts::PI, std::f64::consts::PI], |r| {
-                        [r.min, r.max]
-                    });
+                let range = joints
+                    .planned_range(&joint.name)
+                    .unwrap_or(CONTINUOUS_RANGE);
                 arm.names.push(joint.name.clone());
-                arm.limits.push(limits);
+                arm.limits.push(range);
                 arm.revolute
                     .push(matches!(joint.joint_type, k::JointType::Rotational { .. }));
+                arm.continuous.push(matches!(
+                    joints.ranges.get(&joint.name),
+                    Some(JointRange::Continuous)
+                ));
             }
         }
         if arm.names.is_empty() {
             return Err(UrdfError::NoArmJoint(tcp_link.to_string()));
         }
-        let finger_scale = 1.0 / gripper_joints.len().max(1) as f64;
+        let finger_scale = 1.0 / arm.fingers.len().max(1) as f64;
         let base_drive = |name: &str, limits: Option<[f64; 2]>| -> Drive {
             if let Some(index) = arm.names.iter().position(|n| n == name) {
                 Drive::Arm {
@@ -184,12 +266,7 @@ impl Kinematics {
                 Drive::Constant(limits.map_or(0.0, |[lo, hi]| 0.0f64.clamp(lo, hi)))
             }
         };
-        let limits_of = |name: &str| {
-            nodes
-                .iter()
-                .find(|n| n.joint().name == name)
-                .and_then(|n| n.joint().limits.as_ref().map(|r| [r.min, r.max]))
-        };
+        let limits_of = |name: &str| joints.planned_range(name);
         let mut links = Vec::with_capacity(nodes.len());
         for (i, node) in nodes.iter().enumerate() {
             let (joint_name, joint_type, origin) = {

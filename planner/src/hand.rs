@@ -15,6 +15,7 @@
 //!   when it has none, as Franka's hand), cut at the plane where the finger joints sit (for
 //!   the Panda, 58.4 mm below the flange).
 
+use crate::error::GripperError;
 use crate::fk::Motion;
 use crate::meshes::MeshRole;
 use crate::parry_convert::{pose, robot_shape};
@@ -113,18 +114,31 @@ pub struct HandModel {
 }
 
 impl HandModel {
-    /// The hand of `robot`, or `None` when it has no two prismatic fingers on one link.
+    /// The hand of `robot`, or `None` when the simulation cannot drive its gripper (see
+    /// [`HandModel::build`] for why).
     pub fn new(robot: &Robot) -> Option<HandModel> {
+        HandModel::build(robot).ok()
+    }
+
+    /// The hand of `robot`, or why the simulation cannot drive its gripper: it drives two
+    /// prismatic fingers on one link, each with a primitive collision element to grasp with.
+    pub fn build(robot: &Robot) -> Result<HandModel, GripperError> {
         let links = robot.links();
         let finger_links: Vec<usize> = (0..links.len())
             .filter(|&i| robot.finger_joints().contains(&links[i].joint))
             .collect();
+        if let Some(&i) = finger_links
+            .iter()
+            .find(|&&i| !matches!(links[i].motion, Motion::Prismatic { .. }))
+        {
+            return Err(GripperError::NotPrismatic(links[i].joint.clone()));
+        }
         let [a, b] = finger_links[..] else {
-            return None;
+            return Err(GripperError::FingerCount(robot.finger_joints().to_vec()));
         };
-        let palm_link = links[a].parent?;
+        let palm_link = links[a].parent.ok_or(GripperError::TwoHands)?;
         if links[b].parent != Some(palm_link) {
-            return None;
+            return Err(GripperError::TwoHands);
         }
         // The URDF's own primitives: the hulls that enclose meshes reach past the real link.
         let shapes = |i: usize| -> Vec<(Geometry, Pose)> {
@@ -144,7 +158,7 @@ impl HandModel {
             Motion::Prismatic { axis, .. } => Some(links[i].origin.rotation * axis.into_inner()),
             _ => None,
         };
-        let closing = axis(a)?;
+        let closing = axis(a).ok_or(GripperError::TwoHands)?;
         let (origin_a, origin_b) = (in_palm(a).translation.vector, in_palm(b).translation.vector);
         let inward = |i: usize, from: &Vector3<f64>, to: &Vector3<f64>| {
             let d = (to - from).dot(&closing).signum() * closing;
@@ -167,7 +181,9 @@ impl HandModel {
                 .max_by(|x, y| x.2.total_cmp(&y.2))
                 .map(|(k, b, _)| (k, b))
         };
-        let ((element_a, pad_a), (element_b, pad_b)) = (pad(a, &in_a)?, pad(b, &in_b)?);
+        let no_pad = |i: usize| GripperError::NoPad(links[i].name.clone());
+        let (element_a, pad_a) = pad(a, &in_a).ok_or_else(|| no_pad(a))?;
+        let (element_b, pad_b) = pad(b, &in_b).ok_or_else(|| no_pad(b))?;
         let fingers = [
             Finger {
                 link: a,
@@ -195,7 +211,7 @@ impl HandModel {
             }
             (lo[out] < hi[out]).then(|| LocalBox::from_bounds(lo, hi))
         });
-        Some(HandModel {
+        Ok(HandModel {
             fingers,
             palm_link,
             palm,

@@ -37,7 +37,7 @@ pub mod urdf_load;
 
 pub use config::RobotConfig;
 pub use error::{
-    ConfigError, IkError, JointsError, PandaIkError, PlanError, RobotError, UrdfError,
+    ConfigError, GripperError, IkError, JointsError, PandaIkError, PlanError, RobotError, UrdfError,
 };
 pub use geometry::{Geometry, LinkShape, ShapeRole};
 pub use options::{PlanBudget, PlanOptions};

@@ -3,9 +3,10 @@
 
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
-use crate::error::{IkError, JointsError, MeshFailure, RobotError};
-use crate::fk::{ArmJoints, Kinematics, Link, Mimics};
+use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
+use crate::fk::{ArmJoints, Kinematics, Link, UrdfJoints};
 use crate::geometry::LinkShape;
+use crate::hand::HandModel;
 use crate::ik::{DlsIk, IkSolver, PandaIk};
 use crate::meshes::{read_link_meshes, EmbeddedFiles, LinkMesh, MeshFiles, PackagePath};
 use crate::urdf_load;
@@ -141,7 +142,7 @@ impl Robot {
         if dir.is_dir() && !toml_path.exists() {
             return Err(RobotError::Config {
                 path: toml_path,
-                message: "not found: a robot folder holds robot.toml (its fields: robots/panda/robot.toml, README \"The robot model\") and the URDF it names".into(),
+                message: "not found: a robot folder holds robot.toml (its fields: robots/README.md) and the URDF it names".into(),
             });
         }
         let toml_text = read(&toml_path)?;
@@ -185,26 +186,14 @@ impl Robot {
         };
         let config = RobotConfig::from_toml(toml_text).map_err(|e| config_err(e.to_string()))?;
         config.validate().map_err(|e| config_err(e.to_string()))?;
+        if urdf_path.extension().is_some_and(|e| e == "xacro") {
+            return Err(urdf_err(UrdfError::Xacro.to_string()));
+        }
         let urdf = urdf_load::parse(urdf_text).map_err(|e| urdf_err(e.to_string()))?;
         let chain = urdf_load::chain(&urdf);
-        let mimics: Mimics = urdf
-            .joints
-            .iter()
-            .filter_map(|j| {
-                j.mimic.as_ref().map(|m| {
-                    (
-                        j.name.clone(),
-                        (
-                            m.joint.clone(),
-                            m.multiplier.unwrap_or(1.0),
-                            m.offset.unwrap_or(0.0),
-                        ),
-                    )
-                })
-            })
-            .collect();
+        let joints = UrdfJoints::of(&urdf);
         let (mut kin, arm) =
-            Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &mimics)
+            Kinematics::compile(&chain, &config.tcp_link, &config.gripper.joints, &joints)
                 .map_err(|e| urdf_err(e.to_string()))?;
         let robot_dir = toml_path.parent().unwrap_or(Path::new(""));
         let files = MeshFiles::new(
@@ -231,70 +220,19 @@ impl Robot {
         for (link, shape) in &geometry.enclosures {
             kin.add_shapes(*link, shape.iter().cloned());
         }
-        let dof = kin.dof();
-        for (name, values) in [
-            ("ready", &config.ready),
-            ("velocity_limits", &config.velocity_limits),
-            ("acceleration_limits", &config.acceleration_limits),
-        ] {
-            if values.len() != dof {
-                return Err(config_err(format!(
-                    "{name} has {} values but the arm has {dof} joints ({})",
-                    values.len(),
-                    arm.names.join(", ")
-                )));
-            }
-        }
-        // robot.toml may slow a joint down, never speed it past what its URDF allows.
-        for (name, v) in arm.names.iter().zip(&config.velocity_limits) {
-            let urdf_limit = urdf
-                .joints
-                .iter()
-                .find(|j| j.name == *name)
-                .map(|j| j.limit.velocity)
-                .filter(|l| *l > 0.0);
-            if let Some(limit) = urdf_limit.filter(|l| v > l) {
-                return Err(config_err(format!(
-                    "velocity_limits: {v} rad/s for `{name}` exceeds its URDF limit of {limit} rad/s"
-                )));
-            }
-        }
-        for (i, (v, [lo, hi])) in config.ready.iter().zip(&arm.limits).enumerate() {
-            if v < lo || v > hi {
-                return Err(config_err(format!(
-                    "ready[{i}] = {v} is outside the limits [{lo}, {hi}] of `{}`",
-                    arm.names[i]
-                )));
-            }
-        }
-        let link = |name: &str, field: &str| {
-            kin.link_index(name)
-                .ok_or_else(|| config_err(format!("{field}: `{name}` is not a link of the URDF")))
-        };
-        let flange = link(&config.flange_link, "flange_link")?;
-        let hand_links = config
-            .gripper
-            .hand_links
-            .iter()
-            .map(|n| link(n, "gripper.hand_links"))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mount_links = config
-            .collision
-            .mount_links
-            .iter()
-            .map(|n| link(n, "collision.mount_links"))
-            .collect::<Result<Vec<_>, _>>()?;
-        let allowed_pairs = config
-            .collision
-            .allowed_pairs
-            .iter()
-            .map(|[a, b]| {
-                Ok((
-                    link(a, "collision.allowed_pairs")?,
-                    link(b, "collision.allowed_pairs")?,
-                ))
-            })
-            .collect::<Result<Vec<_>, RobotError>>()?;
+        let (flange, hand_links, mount_links, allowed_pairs) =
+            check_against_urdf(&config, &urdf, &kin, &arm).map_err(|problems| {
+                config_err(match problems.len() {
+                    1 => problems.concat(),
+                    n => format!(
+                        "{n} problems:{}",
+                        problems
+                            .iter()
+                            .map(|p| format!("\n  {p}"))
+                            .collect::<String>()
+                    ),
+                })
+            })?;
         let dls = DlsIk::new(arm.limits.clone());
         let ik = match config.ik.solver {
             IkSolverKind::Panda => IkSolver::Panda {
@@ -306,7 +244,7 @@ impl Robot {
             },
             IkSolverKind::Dls => IkSolver::Dls(dls),
         };
-        Ok(Robot {
+        let robot = Robot {
             source: toml_path
                 .parent()
                 .map_or_else(String::new, |p| p.display().to_string()),
@@ -321,7 +259,13 @@ impl Robot {
             mount_links,
             allowed_pairs,
             meshes: geometry.meshes,
-        })
+        };
+        // A gripper the simulation cannot drive is refused now, not when a trial runs.
+        HandModel::build(&robot).map_err(|source| RobotError::Gripper {
+            path: toml_path.to_path_buf(),
+            source,
+        })?;
+        Ok(robot)
     }
 
     /// The URDF's collision and visual meshes, each in its link's frame (empty when the URDF
@@ -420,9 +364,36 @@ impl Robot {
         &self.allowed_pairs
     }
 
-    /// Gripper finger joint names.
+    /// Every joint the gripper's opening moves: those `robot.toml` lists, then the URDF
+    /// joints that mimic one of them.
     pub fn finger_joints(&self) -> &[String] {
-        &self.config.gripper.joints
+        &self.arm.fingers
+    }
+
+    /// Whether each arm joint is continuous (turns without end; planned over
+    /// [`crate::fk::CONTINUOUS_RANGE`]).
+    pub fn continuous_joints(&self) -> &[bool] {
+        &self.arm.continuous
+    }
+
+    /// Moves each continuous joint of `q` by whole turns to the angle nearest `seed`'s
+    /// that stays within its planned range.
+    fn nearest_turns(&self, mut q: Vec<f64>, seed: &[f64]) -> Vec<f64> {
+        use std::f64::consts::TAU;
+        for (i, v) in q.iter_mut().enumerate() {
+            if let (true, Some(s)) = (self.arm.continuous[i], seed.get(i)) {
+                let [lo, hi] = self.arm.limits[i];
+                let near = *v + ((s - *v) / TAU).round() * TAU;
+                *v = if near < lo {
+                    near + TAU
+                } else if near > hi {
+                    near - TAU
+                } else {
+                    near
+                };
+            }
+        }
+        q
     }
 
     /// Gripper opening width when open (metres).
@@ -499,13 +470,33 @@ impl Robot {
                 self.dof()
             )));
         }
-        self.ik.nearest(&self.kin, tcp, seed)
+        self.ik
+            .nearest(&self.kin, tcp, seed)
+            .map(|q| self.nearest_turns(q, seed))
     }
 
     /// Up to `max` distinct configurations that put the TCP at `tcp`, nearest `seed` first.
     pub fn ik_solutions(&self, tcp: &Pose, seed: &[f64], max: usize) -> Vec<Vec<f64>> {
-        self.ik
-            .solutions(&self.kin, tcp, seed, max, SOLUTION_SPACING)
+        let found = self
+            .ik
+            .solutions(&self.kin, tcp, seed, max, SOLUTION_SPACING);
+        if !self.arm.continuous.contains(&true) {
+            return found;
+        }
+        // Solutions a whole turn apart become one once moved to the turn nearest the seed.
+        let mut all: Vec<Vec<f64>> = Vec::with_capacity(found.len());
+        for q in found.into_iter().map(|q| self.nearest_turns(q, seed)) {
+            if all
+                .iter()
+                .all(|s| crate::ik::analytic::max_step(s, &q) > SOLUTION_SPACING)
+            {
+                all.push(q);
+            }
+        }
+        let distance =
+            |q: &Vec<f64>| -> f64 { q.iter().zip(seed).map(|(a, b)| (a - b).powi(2)).sum() };
+        all.sort_by(|a, b| distance(a).total_cmp(&distance(b)));
+        all
     }
 
     /// A configuration for `tcp` no joint of which is more than `max_joint_step` from
@@ -516,12 +507,99 @@ impl Robot {
         previous: &[f64],
         max_joint_step: f64,
     ) -> Option<Vec<f64>> {
-        self.ik.continuous(&self.kin, tcp, previous, max_joint_step)
+        self.ik
+            .continuous(&self.kin, tcp, previous, max_joint_step)
+            .map(|q| self.nearest_turns(q, previous))
     }
 
     /// The inverse kinematics solver.
     pub fn ik_solver(&self) -> &IkSolver {
         &self.ik
+    }
+}
+
+/// The links `robot.toml` names, as indices: the flange, hand links, mount links and
+/// allowed pairs.
+type NamedLinks = (usize, Vec<usize>, Vec<usize>, Vec<(usize, usize)>);
+
+/// Checks `robot.toml` against the URDF (lengths of the joint arrays, velocities within the
+/// URDF's, the ready pose within the limits, every link it names) and finds the links it
+/// names; every problem found is returned, one line each.
+fn check_against_urdf(
+    config: &RobotConfig,
+    urdf: &urdf_rs::Robot,
+    kin: &Kinematics,
+    arm: &ArmJoints,
+) -> Result<NamedLinks, Vec<String>> {
+    let mut problems = Vec::new();
+    let dof = kin.dof();
+    for (name, values) in [
+        ("ready", &config.ready),
+        ("velocity_limits", &config.velocity_limits),
+        ("acceleration_limits", &config.acceleration_limits),
+    ] {
+        if values.len() != dof {
+            problems.push(format!(
+                "{name} has {} values but the arm has {dof} joints ({})",
+                values.len(),
+                arm.names.join(", ")
+            ));
+        }
+    }
+    // robot.toml may slow a joint down, never speed it past what its URDF allows.
+    for (name, v) in arm.names.iter().zip(&config.velocity_limits) {
+        let urdf_limit = urdf
+            .joints
+            .iter()
+            .find(|j| j.name == *name)
+            .map(|j| j.limit.velocity)
+            .filter(|l| *l > 0.0);
+        if let Some(limit) = urdf_limit.filter(|l| v > l) {
+            problems.push(format!(
+                "velocity_limits: {v} rad/s for `{name}` exceeds its URDF limit of {limit} rad/s"
+            ));
+        }
+    }
+    for (i, (v, [lo, hi])) in config.ready.iter().zip(&arm.limits).enumerate() {
+        if v < lo || v > hi {
+            problems.push(format!(
+                "ready[{i}] = {v} is outside the limits [{lo}, {hi}] of `{}`",
+                arm.names[i]
+            ));
+        }
+    }
+    let mut link = |name: &str, field: &str| {
+        let found = kin.link_index(name);
+        if found.is_none() {
+            problems.push(format!("{field}: `{name}` is not a link of the URDF"));
+        }
+        found.unwrap_or(0)
+    };
+    let flange = link(&config.flange_link, "flange_link");
+    let names = |list: &[String], field: &str, link: &mut dyn FnMut(&str, &str) -> usize| {
+        list.iter().map(|n| link(n, field)).collect::<Vec<_>>()
+    };
+    let hand_links = names(&config.gripper.hand_links, "gripper.hand_links", &mut link);
+    let mount_links = names(
+        &config.collision.mount_links,
+        "collision.mount_links",
+        &mut link,
+    );
+    let allowed_pairs = config
+        .collision
+        .allowed_pairs
+        .iter()
+        .map(|[a, b]| {
+            (
+                link(a, "collision.allowed_pairs"),
+                link(b, "collision.allowed_pairs"),
+            )
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok((flange, hand_links, mount_links, allowed_pairs))
+    } else {
+        Err(problems)
     }
 }
 
@@ -734,3 +812,7 @@ mod tests {
         assert!(matches!(robot.ik_solver(), IkSolver::Dls(_)));
     }
 }
+
+#[cfg(test)]
+#[path = "robot_quirks.rs"]
+mod quirks;

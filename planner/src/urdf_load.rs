@@ -20,49 +20,53 @@ pub fn chain(robot: &urdf_rs::Robot) -> k::Chain<f64> {
 }
 
 /// Checks that links and joints form one tree, joint types are supported, mimic targets exist
-/// and numbers are finite; the error names the joint or link at fault.
+/// and numbers are finite. Every problem found is reported, each naming its joint or link:
+/// one alone as itself, several as [`UrdfError::Several`].
 pub fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
+    let mut problems = Vec::new();
     let links: BTreeSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     if links.len() != robot.links.len() {
-        return Err(UrdfError::DuplicateName("links"));
+        problems.push(UrdfError::DuplicateName("links"));
     }
     let joints: BTreeSet<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
     if joints.len() != robot.joints.len() {
-        return Err(UrdfError::DuplicateName("joints"));
+        problems.push(UrdfError::DuplicateName("joints"));
     }
     let mut parent_of: BTreeMap<&str, &str> = BTreeMap::new();
     for j in &robot.joints {
-        let at = |problem: String| UrdfError::Joint {
-            joint: j.name.clone(),
-            problem,
+        let mut at = |problem: String| {
+            problems.push(UrdfError::Joint {
+                joint: j.name.clone(),
+                problem,
+            })
         };
         for link in [&j.parent.link, &j.child.link] {
             if !links.contains(link.as_str()) {
-                return Err(at(format!("unknown link `{link}`")));
+                at(format!("unknown link `{link}`"));
             }
         }
         if parent_of.insert(&j.child.link, &j.parent.link).is_some() {
-            return Err(at(format!(
+            at(format!(
                 "link `{}` is the child of more than one joint",
                 j.child.link
-            )));
+            ));
         }
         match &j.joint_type {
             urdf_rs::JointType::Revolute
             | urdf_rs::JointType::Continuous
             | urdf_rs::JointType::Prismatic
             | urdf_rs::JointType::Fixed => {}
-            other => return Err(at(format!("joint type {other:?} is not supported"))),
+            other => at(format!("joint type {other:?} is not supported")),
         }
         let numbers = j.origin.xyz.iter().chain(j.origin.rpy.iter());
         if numbers.chain(j.axis.xyz.iter()).any(|v| !v.is_finite()) {
-            return Err(at("origin or axis holds a non-finite number".into()));
+            at("origin or axis holds a non-finite number".into());
         }
         // A fixed joint's axis means nothing (ROS tools accept `<axis xyz="0 0 0"/>` there).
         let axis = j.axis.xyz;
         let moves = !matches!(j.joint_type, urdf_rs::JointType::Fixed);
         if moves && axis.iter().map(|v| v * v).sum::<f64>() < 1e-12 {
-            return Err(at("axis has zero length".into()));
+            at("axis has zero length".into());
         }
         if matches!(
             j.joint_type,
@@ -71,14 +75,18 @@ pub fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
             && j.limit.upper.is_finite()
             && j.limit.lower <= j.limit.upper)
         {
-            return Err(at(format!(
+            at(format!(
                 "limits [{}, {}] are not finite and ordered",
                 j.limit.lower, j.limit.upper
-            )));
+            ));
         }
         if let Some(m) = &j.mimic {
             if !joints.contains(m.joint.as_str()) {
-                return Err(at(format!("mimics unknown joint `{}`", m.joint)));
+                at(format!("mimics unknown joint `{}`", m.joint));
+            }
+            let factors = [m.multiplier, m.offset];
+            if factors.iter().flatten().any(|v| !v.is_finite()) {
+                at("mimic multiplier or offset is not finite".into());
             }
         }
     }
@@ -88,22 +96,32 @@ pub fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
         .filter(|l| !parent_of.contains_key(l))
         .collect();
     if roots.len() != 1 {
-        return Err(UrdfError::NotOneTree(
+        problems.push(UrdfError::NotOneTree(
             roots.iter().map(|r| r.to_string()).collect(),
         ));
     }
-    // Every link reaches the root without revisiting a link (no cycles).
+    // Every link reaches the root without revisiting a link (no cycles); a cycle is named
+    // once, by its first link in name order.
+    let mut in_cycle = BTreeSet::new();
     for start in &links {
         let mut seen = BTreeSet::new();
         let mut link = *start;
         while let Some(parent) = parent_of.get(link) {
             if !seen.insert(link) {
-                return Err(UrdfError::Cycle(link.to_string()));
+                if seen.iter().all(|l| !in_cycle.contains(l)) {
+                    problems.push(UrdfError::Cycle(link.to_string()));
+                }
+                in_cycle.extend(seen);
+                break;
             }
             link = parent;
         }
     }
-    Ok(())
+    match problems.len() {
+        0 => Ok(()),
+        1 => Err(problems.remove(0)),
+        _ => Err(UrdfError::Several(problems)),
+    }
 }
 
 #[cfg(test)]
@@ -152,6 +170,31 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("axis has zero length"), "{e}");
+    }
+
+    #[test]
+    fn every_problem_is_listed_at_once() {
+        let text = TWO_LINKS
+            .replace(r#"<child link="b"/>"#, r#"<child link="c"/>"#)
+            .replace(r#"<axis xyz="0 0 1"/>"#, r#"<axis xyz="0 0 0"/>"#)
+            .replace(
+                "</robot>",
+                r#"<joint name="k" type="planar"><parent link="a"/>
+                <child link="b"/><axis xyz="1 0 0"/></joint></robot>"#,
+            );
+        let e = parse(&text).unwrap_err();
+        let UrdfError::Several(problems) = &e else {
+            panic!("{e}")
+        };
+        assert_eq!(problems.len(), 3, "{e}");
+        let e = e.to_string();
+        assert!(
+            e.contains("3 problems")
+                && e.contains("joint `j`: unknown link `c`")
+                && e.contains("joint `j`: axis has zero length")
+                && e.contains("joint `k`: joint type Planar is not supported"),
+            "{e}"
+        );
     }
 
     #[test]

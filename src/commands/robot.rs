@@ -62,6 +62,8 @@ pub(super) fn joints(text: &str, flag: &str, robot: &Robot) -> Result<Vec<f64>, 
 #[derive(Serialize)]
 struct JointInfo {
     name: String,
+    /// A continuous joint: lower and upper are the range planned over, not limits.
+    continuous: bool,
     lower: f64,
     upper: f64,
     velocity: f64,
@@ -121,6 +123,7 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
             .enumerate()
             .map(|(i, name)| JointInfo {
                 name: name.clone(),
+                continuous: robot.continuous_joints()[i],
                 lower: robot.joint_limits()[i][0],
                 upper: robot.joint_limits()[i][1],
                 velocity: robot.velocity_limits()[i],
@@ -182,9 +185,10 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         "ready",
     ]);
     for (i, j) in summary.joints.iter().enumerate() {
+        let continuous = if j.continuous { " (continuous)" } else { "" };
         table.row(vec![
             (i + 1).to_string(),
-            j.name.clone(),
+            format!("{}{continuous}", j.name),
             format!("{:.4}", j.lower),
             format!("{:.4}", j.upper),
             format!("{}", j.velocity),

@@ -48,6 +48,9 @@ pub struct PandaIk {
     a7: f64,
     tcp_in_7: Pose,
     seven_in_tcp: Pose,
+    /// The inverse of joint 1's parent frame in the robot's base frame (identity unless
+    /// fixed links before the arm move it).
+    arm_base_inverse: Pose,
     limits: [[f64; 2]; DOF],
 }
 
@@ -86,8 +89,8 @@ impl PandaIk {
             path.push(p);
         }
         path.reverse();
-        // Fixed links before joint 1 (such as the FER's root link `base`) are part of the
-        // base when they do not move it.
+        // Fixed links before joint 1 (such as the FER's root link `base`, or a mount plate
+        // that lifts the arm) are part of the base: targets are moved into joint 1's frame.
         let mut base = links[path[0]].origin;
         while path.len() > 1 && links[path[1]].motion == Motion::Fixed {
             base *= links[path[1]].origin;
@@ -96,9 +99,6 @@ impl PandaIk {
         // path: base, joint 1 .. joint 7, then fixed links to the TCP.
         if path.len() < 1 + DOF {
             return Err(PandaIkError::ShortChain);
-        }
-        if base.translation.vector.norm() > 1e-12 || base.rotation.angle() > 1e-12 {
-            return Err(PandaIkError::MovedBase(links[path[0]].joint.clone()));
         }
         let mut ad = [(0.0, 0.0); DOF];
         for (k, &i) in path[1..=DOF].iter().enumerate() {
@@ -156,13 +156,15 @@ impl PandaIk {
             a7: ad[6].0,
             tcp_in_7,
             seven_in_tcp: tcp_in_7.inverse(),
+            arm_base_inverse: base.inverse(),
             limits: lim,
         })
     }
 
-    /// The pose of frame 7 that puts the TCP at `tcp`.
+    /// The pose of frame 7, in the frame of joint 1's parent, that puts the TCP at `tcp`
+    /// (given in the robot's base frame).
     pub fn frame7_for(&self, tcp: &Pose) -> Pose {
-        tcp * self.seven_in_tcp
+        self.arm_base_inverse * tcp * self.seven_in_tcp
     }
 
     /// The TCP offset from frame 7.
@@ -552,38 +554,38 @@ mod tests {
     /// The FER's root link `base` sits before joint 1 on a fixed joint: accepted while that
     /// joint does not move the base, refused (naming it) when it does.
     #[test]
-    fn fixed_links_before_joint_1_must_not_move_the_base() {
-        let kinematics = |urdf: &str| {
-            let robot = crate::urdf_load::parse(urdf).unwrap();
-            let chain = crate::urdf_load::chain(&robot);
+    fn fixed_links_before_joint_1_may_move_the_base() {
+        let base_joint = r#"<child link="fer_link0"/>
+    <origin rpy="0 0 0" xyz="0 0 0"/>"#;
+        assert!(crate::robot::PANDA_URDF.contains(base_joint));
+        for moved in [
+            r#"rpy="0 0 0" xyz="0 0 0.1""#,
+            r#"rpy="0 0 0.7" xyz="0.05 -0.2 0""#,
+        ] {
+            let urdf = crate::robot::PANDA_URDF.replace(
+                base_joint,
+                &format!("<child link=\"fer_link0\"/>\n    <origin {moved}/>"),
+            );
+            let parsed = crate::urdf_load::parse(&urdf).unwrap();
+            let chain = crate::urdf_load::chain(&parsed);
             let fingers = [
                 "fer_finger_joint1".to_string(),
                 "fer_finger_joint2".to_string(),
             ];
-            let (kin, arm) =
-                Kinematics::compile(&chain, "fer_hand_tcp", &fingers, &crate::fk::Mimics::new())
-                    .unwrap();
-            PandaIk::from_kinematics(&kin, &arm.limits)
-        };
-        let urdf = crate::robot::PANDA_URDF;
-        assert!(kinematics(urdf).is_ok());
-        let base_joint = r#"<child link="fer_link0"/>
-    <origin rpy="0 0 0" xyz="0 0 0"/>"#;
-        assert!(urdf.contains(base_joint));
-        for moved in ["0 0 0.1", "0.05 0 0"] {
-            let e = kinematics(&urdf.replace(
-                base_joint,
-                &format!(
-                    "<child link=\"fer_link0\"/>\n    <origin rpy=\"0 0 0\" xyz=\"{moved}\"/>"
-                ),
-            ))
-            .unwrap_err();
-            assert_eq!(e, PandaIkError::MovedBase("fer_base_joint".into()));
-            let e = e.to_string();
-            assert!(
-                e.contains("move the base") && e.contains("fer_base_joint"),
-                "{e}"
-            );
+            let (kin, arm) = Kinematics::compile(
+                &chain,
+                "fer_hand_tcp",
+                &fingers,
+                &crate::fk::UrdfJoints::of(&parsed),
+            )
+            .unwrap();
+            let ik = PandaIk::from_kinematics(&kin, &arm.limits).unwrap();
+            let q = [0.3, -0.5, 0.2, -2.0, 0.1, 1.8, 0.6];
+            let target = kin.tcp_pose(&q);
+            let got = ik.nearest(&kin, &target, &q).expect("solved");
+            let pose = kin.tcp_pose(&got);
+            assert!((pose.translation.vector - target.translation.vector).norm() < 1e-6);
+            assert!(max_step(&got, &q) < 1e-6, "{got:?}");
         }
     }
 }

@@ -1,0 +1,205 @@
+//! Tests of the stock-URDF quirks a robot folder must accept or refuse clearly, on a small
+//! six-joint arm made of primitives, laid out as vendors' xacro output is: an extra root link
+//! before the arm, `<axis xyz="0 0 0"/>` on fixed joints, continuous joints, and a finger that
+//! mimics the other.
+
+use super::*;
+use crate::error::GripperError;
+use crate::fk::CONTINUOUS_RANGE;
+
+/// A six-joint arm: joints 1 and 6 continuous, a root link `world` before `base_link`, fixed
+/// joints with a zero axis, and a two-finger hand whose right finger mimics the left.
+const ARM: &str = r#"<?xml version="1.0"?>
+<robot name="arm6">
+  <link name="world"/>
+  <joint name="world_joint" type="fixed"><parent link="world"/><child link="base_link"/>
+    <origin xyz="0 0 0.02" rpy="0 0 0"/><axis xyz="0 0 0"/></joint>
+  <link name="base_link"><collision><geometry><cylinder radius="0.06" length="0.1"/></geometry></collision></link>
+  <joint name="j1" type="continuous"><parent link="base_link"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit effort="10" velocity="3"/></joint>
+  <link name="l1"/>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="10" velocity="3"/></joint>
+  <link name="l2"><collision><origin xyz="0 0 0.15"/><geometry><cylinder radius="0.03" length="0.25"/></geometry></collision></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 1 0"/><limit lower="-2.5" upper="2.5" effort="10" velocity="3"/></joint>
+  <link name="l3"><collision><origin xyz="0 0 0.12"/><geometry><cylinder radius="0.03" length="0.2"/></geometry></collision></link>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/>
+    <origin xyz="0 0 0.25"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="3"/></joint>
+  <link name="l4"/>
+  <joint name="j5" type="revolute"><parent link="l4"/><child link="l5"/>
+    <origin xyz="0 0 0.05"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="10" velocity="3"/></joint>
+  <link name="l5"/>
+  <joint name="j6" type="continuous"><parent link="l5"/><child link="flange"/>
+    <origin xyz="0 0 0.05"/><axis xyz="0 0 1"/></joint>
+  <link name="flange"/>
+  <joint name="hand_joint" type="fixed"><parent link="flange"/><child link="hand"/>
+    <origin xyz="0 0 0.01"/><axis xyz="0 0 0"/></joint>
+  <link name="hand"><collision><origin xyz="0 0 0.02"/><geometry><box size="0.04 0.16 0.04"/></geometry></collision></link>
+  <joint name="left_joint" type="prismatic"><parent link="hand"/><child link="left"/>
+    <origin xyz="0 0 0.04"/><axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="10" velocity="0.2"/></joint>
+  <link name="left"><collision><origin xyz="0 0.005 0.03"/><geometry><box size="0.02 0.01 0.04"/></geometry></collision></link>
+  <joint name="right_joint" type="prismatic"><parent link="hand"/><child link="right"/>
+    <origin xyz="0 0 0.04"/><axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="10" velocity="0.2"/>
+    <mimic joint="left_joint"/></joint>
+  <link name="right"><collision><origin xyz="0 -0.005 0.03"/><geometry><box size="0.02 0.01 0.04"/></geometry></collision></link>
+  <joint name="tcp_joint" type="fixed"><parent link="hand"/><child link="tcp"/>
+    <origin xyz="0 0 0.07"/></joint>
+  <link name="tcp"/>
+</robot>
+"#;
+
+/// Its `robot.toml`: only the driven finger listed.
+const ARM_TOML: &str = r#"
+name = "arm6"
+urdf = "arm6.urdf"
+tcp_link = "tcp"
+flange_link = "flange"
+ready = [0.0, 0.3, 1.0, 0.0, 1.0, 0.0]
+velocity_limits = [3.0, 3.0, 3.0, 3.0, 3.0, 3.0]
+acceleration_limits = [10.0, 10.0, 10.0, 10.0, 10.0, 10.0]
+[ik]
+solver = "dls"
+[gripper]
+joints = ["left_joint"]
+open_width = 0.08
+speed = 0.1
+hand_links = ["hand", "left", "right"]
+[collision]
+arm_margin = 0.01
+hand_margin = 0.005
+held_margin = 0.002
+self_margin = 0.01
+"#;
+
+fn arm(toml: &str, urdf: &str) -> Result<Robot, RobotError> {
+    Robot::from_texts(
+        toml,
+        Path::new("arm6/robot.toml"),
+        urdf,
+        Path::new("arm6/arm6.urdf"),
+    )
+}
+
+#[test]
+fn a_stock_like_arm_loads() {
+    let robot = arm(ARM_TOML, ARM).unwrap();
+    assert_eq!(robot.dof(), 6);
+    assert_eq!(robot.links()[0].name, "world");
+}
+
+#[test]
+fn continuous_joints_are_unbounded_and_answered_at_the_turn_nearest_the_seed() {
+    let robot = arm(ARM_TOML, ARM).unwrap();
+    assert_eq!(
+        robot.continuous_joints(),
+        [true, false, false, false, false, true]
+    );
+    assert_eq!(robot.joint_limits()[0], CONTINUOUS_RANGE);
+    assert_eq!(robot.joint_limits()[5], CONTINUOUS_RANGE);
+    // More than half a turn either way is a configuration, not clamped to ±π.
+    let q = [4.0, 0.3, 1.0, 0.2, 1.0, -5.0];
+    assert!(robot.check_joints(&q).is_ok());
+    // A solution and the seed a whole turn apart on joint 6: the answer is the seed's turn.
+    let target = robot.tcp_pose(&q);
+    let seed = [4.0, 0.3, 1.0, 0.2, 1.0, -5.0 + std::f64::consts::TAU];
+    let got = robot.ik(&target, &seed).unwrap();
+    assert!((got[5] - seed[5]).abs() < 1e-3, "{got:?}");
+    let moved = robot.nearest_turns(
+        vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.1],
+        &[6.0, 0.0, 0.0, 0.0, 0.0, -6.0],
+    );
+    // 0.1 + τ is nearest 6.0 but past the planned range: the turn within it.
+    assert!((moved[0] - 0.1).abs() < 1e-12, "{moved:?}");
+    assert!(
+        (moved[5] - (0.1 - std::f64::consts::TAU)).abs() < 1e-12,
+        "{moved:?}"
+    );
+}
+
+#[test]
+fn a_mimicked_finger_moves_half_the_width_like_the_listed_one() {
+    let robot = arm(ARM_TOML, ARM).unwrap();
+    assert_eq!(robot.finger_joints(), ["left_joint", "right_joint"]);
+    let left = robot.links().iter().position(|l| l.name == "left").unwrap();
+    let right = robot
+        .links()
+        .iter()
+        .position(|l| l.name == "right")
+        .unwrap();
+    for width in [0.0, 0.03, 0.08] {
+        let poses = robot.link_poses(robot.ready(), width);
+        let gap = (poses[left].translation.vector - poses[right].translation.vector).norm();
+        assert!((gap - width).abs() < 1e-12, "{width}: {gap}");
+    }
+    assert!((robot.gripper_travel_time() - 0.4).abs() < 1e-12);
+    assert!(HandModel::new(&robot).is_some());
+}
+
+#[test]
+fn a_gripper_the_simulation_cannot_drive_is_refused_on_load() {
+    let knuckle = ARM.replace(
+        r#"<joint name="left_joint" type="prismatic">"#,
+        r#"<joint name="left_joint" type="revolute">"#,
+    );
+    let e = arm(ARM_TOML, &knuckle).unwrap_err();
+    assert!(
+        matches!(&e, RobotError::Gripper { source: GripperError::NotPrismatic(j), .. } if j == "left_joint"),
+        "{e}"
+    );
+    let e = e.to_string();
+    assert!(
+        e.contains("arm6/robot.toml") && e.contains("linkage"),
+        "{e}"
+    );
+    let none = ARM_TOML.replace(r#"joints = ["left_joint"]"#, "joints = []");
+    let e = arm(&none, ARM).unwrap_err();
+    assert!(
+        matches!(&e, RobotError::Gripper { source: GripperError::FingerCount(j), .. } if j.is_empty()),
+        "{e}"
+    );
+    let padless = ARM.replace(
+        r#"<link name="left"><collision><origin xyz="0 0.005 0.03"/><geometry><box size="0.02 0.01 0.04"/></geometry></collision></link>"#,
+        r#"<link name="left"/>"#,
+    );
+    let e = arm(ARM_TOML, &padless).unwrap_err().to_string();
+    assert!(e.contains("finger link `left`"), "{e}");
+}
+
+#[test]
+fn every_contradiction_of_robot_toml_and_the_urdf_is_listed_at_once() {
+    let toml = ARM_TOML
+        .replace("ready = [0.0, 0.3,", "ready = [0.3,")
+        .replace("velocity_limits = [3.0,", "velocity_limits = [10.0,")
+        .replace(r#"hand_links = ["hand","#, r#"hand_links = ["palm","#);
+    let e = arm(&toml, ARM).unwrap_err().to_string();
+    assert!(e.starts_with("arm6/robot.toml: 3 problems:"), "{e}");
+    assert!(
+        e.contains("ready has 5 values but the arm has 6 joints"),
+        "{e}"
+    );
+    assert!(
+        e.contains("velocity_limits: 10 rad/s for `j1` exceeds its URDF limit of 3 rad/s"),
+        "{e}"
+    );
+    assert!(
+        e.contains("gripper.hand_links: `palm` is not a link of the URDF"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_xacro_file_is_named_with_the_command_that_expands_it() {
+    let e = Robot::from_texts(
+        ARM_TOML,
+        Path::new("arm6/robot.toml"),
+        ARM,
+        Path::new("arm6/arm6.urdf.xacro"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("arm6/arm6.urdf.xacro:") && e.contains("xacro robot.urdf.xacro > robot.urdf"),
+        "{e}"
+    );
+}

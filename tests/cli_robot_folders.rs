@@ -1,0 +1,120 @@
+//! Robot folders through the binary: a stock-like description's problems are refused when the
+//! robot is loaded (exit 2), each named, all at once.
+
+mod common;
+
+use common::{akl, scratch, stderr};
+use std::path::{Path, PathBuf};
+
+/// A copy of the built-in Panda's folder with its URDF and `robot.toml` edited, the meshes
+/// found in the repository's `robots/panda`.
+fn panda_folder(
+    name: &str,
+    urdf_name: &str,
+    edit_urdf: impl Fn(&str) -> String,
+    edit_toml: impl Fn(&str) -> String,
+) -> PathBuf {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/panda");
+    let dir = scratch(name);
+    let urdf = std::fs::read_to_string(repo.join("fer.urdf")).unwrap();
+    std::fs::write(dir.join(urdf_name), edit_urdf(&urdf)).unwrap();
+    let toml = std::fs::read_to_string(repo.join("robot.toml"))
+        .unwrap()
+        .replace("urdf = \"fer.urdf\"", &format!("urdf = \"{urdf_name}\""))
+        .replace(
+            "franka_description = \".\"",
+            &format!("franka_description = {:?}", repo.display().to_string()),
+        );
+    std::fs::write(dir.join("robot.toml"), edit_toml(&toml)).unwrap();
+    dir
+}
+
+fn info(dir: &Path) -> std::process::Output {
+    akl(&["robot", "info", "--robot", dir.to_str().unwrap()])
+}
+
+#[test]
+fn a_revolute_finger_is_refused_when_the_robot_is_loaded() {
+    let dir = panda_folder(
+        "folder-knuckle",
+        "fer.urdf",
+        |u| {
+            u.replace(
+                r#"<joint name="fer_finger_joint1" type="prismatic">"#,
+                r#"<joint name="fer_finger_joint1" type="revolute">"#,
+            )
+        },
+        str::to_string,
+    );
+    let out = info(&dir);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains("robot.toml: [gripper]")
+            && e.contains("`fer_finger_joint1` is not prismatic")
+            && e.contains("linkage"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn every_contradiction_with_the_urdf_is_listed() {
+    let dir = panda_folder("folder-contradictions", "fer.urdf", str::to_string, |t| {
+        t.replace(
+            "velocity_limits = [2.175, 2.175,",
+            "velocity_limits = [10.0, 2.175,",
+        )
+        .replace("flange_link = \"fer_link8\"", "flange_link = \"tool0\"")
+    });
+    let out = info(&dir);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(e.contains("2 problems"), "{e}");
+    assert!(
+        e.contains("10 rad/s for `fer_joint1` exceeds its URDF limit of 2.175"),
+        "{e}"
+    );
+    assert!(
+        e.contains("flange_link: `tool0` is not a link of the URDF"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_xacro_file_is_named_with_the_command_that_expands_it() {
+    let dir = panda_folder(
+        "folder-xacro",
+        "fer.urdf.xacro",
+        |u| {
+            u.replacen(
+                "<robot ",
+                r#"<robot xmlns:xacro="http://www.ros.org/wiki/xacro" "#,
+                1,
+            )
+        },
+        str::to_string,
+    );
+    let out = info(&dir);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains("fer.urdf.xacro") && e.contains("xacro robot.urdf.xacro > robot.urdf"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_folder_without_robot_toml_is_named() {
+    let dir = scratch("folder-no-toml");
+    let out = info(&dir);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains(&dir.join("robot.toml").display().to_string()) && e.contains("robots/README.md"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
