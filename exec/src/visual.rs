@@ -2,21 +2,20 @@
 //! STL embedded in the message), locked to the link's frame, so a trace shows the real arm
 //! beside the collision model that was checked.
 
-use crate::trace::{color, pose, scene_update, stamp};
+use akl_foxglove::{Model, SceneEntity, SceneUpdate, Vector3};
 use akl_planner::meshes::MeshRole;
 use akl_planner::Robot;
 use akl_tsr::Pose;
 use base64::Engine as _;
-use serde_json::{json, Value};
 
 /// The colour the visual meshes are drawn in (their own materials are not read).
 const LOOK: [f64; 4] = [0.93, 0.93, 0.95, 1.0];
 
 /// A scene update with one entity per link that has visual meshes; `None` when the robot
 /// has none (a URDF of primitives).
-pub fn robot_models(robot: &Robot) -> Option<Value> {
+pub fn robot_models(robot: &Robot) -> Option<SceneUpdate> {
     let links = robot.links();
-    let entities: Vec<Value> = (0..links.len())
+    let entities: Vec<SceneEntity> = (0..links.len())
         .filter_map(|i| {
             let meshes: Vec<_> = robot
                 .meshes()
@@ -27,18 +26,24 @@ pub fn robot_models(robot: &Robot) -> Option<Value> {
                 return None;
             }
             let stl = binary_stl(meshes.iter().flat_map(|m| m.mesh.corners()));
-            let model = json!({"pose": pose(&Pose::identity()),
-                "scale": {"x": 1.0, "y": 1.0, "z": 1.0}, "color": color(LOOK),
-                "override_color": true, "url": "", "media_type": "model/stl",
-                "data": base64::engine::general_purpose::STANDARD.encode(stl)});
-            Some(json!({"timestamp": stamp(0.0), "frame_id": links[i].name,
-                "id": format!("{} visual", links[i].name),
-                "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": true, "metadata": [],
-                "arrows": [], "cubes": [], "spheres": [], "cylinders": [], "lines": [],
-                "triangles": [], "texts": [], "models": [model]}))
+            let model = Model {
+                pose: (&Pose::identity()).into(),
+                scale: Vector3::uniform(1.0),
+                color: LOOK.into(),
+                override_color: true,
+                url: String::new(),
+                media_type: "model/stl".into(),
+                data: base64::engine::general_purpose::STANDARD.encode(stl),
+            };
+            let id = format!("{} visual", links[i].name);
+            Some(SceneEntity {
+                frame_locked: true,
+                models: vec![model],
+                ..SceneEntity::new(0.0, &links[i].name, &id)
+            })
         })
         .collect();
-    (!entities.is_empty()).then(|| scene_update(entities))
+    (!entities.is_empty()).then(|| SceneUpdate::new(entities))
 }
 
 /// Triangles as a binary STL file (80-byte header, count, then per triangle a normal, three
@@ -90,11 +95,10 @@ mod tests {
     fn every_panda_link_with_a_visual_mesh_gets_a_model() {
         let robot = Robot::panda().unwrap();
         let update = robot_models(&robot).unwrap();
-        let ids: Vec<&str> = update["entities"]
-            .as_array()
-            .unwrap()
+        let ids: Vec<&str> = update
+            .entities
             .iter()
-            .map(|e| e["frame_id"].as_str().unwrap())
+            .map(|e| e.frame_id.as_str())
             .collect();
         // Links 0-7, the hand and both fingers.
         assert_eq!(ids.len(), 11, "{ids:?}");

@@ -11,8 +11,11 @@ use std::collections::BTreeMap;
 use std::io::{Seek, Write};
 use std::time::{Duration, Instant};
 
+use akl_foxglove::schema::{boolean, integer, object, object_with_optional, string};
+use akl_foxglove::{Channel, Log, LogLevel, McapWriter, Message, PoseInFrame, Schema, Time};
 use akl_tsr::{Gripper, Pose};
 use k::nalgebra::{Quaternion, Translation3, UnitQuaternion};
+use serde::Serialize;
 use serde_json::{json, Value};
 
 use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, DEMO_VERSION};
@@ -27,91 +30,104 @@ pub const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// Longest stretch of recording kept in an unfinished chunk.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 
-const POSE_SCHEMA: &str = r#"{"title":"foxglove.PoseInFrame","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"pose":{"type":"object","properties":{"position":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}}}"#;
-const LOG_SCHEMA: &str = r#"{"title":"foxglove.Log","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"level":{"type":"integer"},"message":{"type":"string"},"name":{"type":"string"},"file":{"type":"string"},"line":{"type":"integer"}}}"#;
-const GRIPPER_SCHEMA: &str = r#"{"title":"akl.Gripper","type":"object","properties":{"state":{"type":"string","enum":["open","closed"]}}}"#;
-const DETECTOR_SCHEMA: &str =
-    r#"{"title":"akl.Detector","type":"object","properties":{"constrained":{"type":"boolean"}}}"#;
-const HEADER_SCHEMA: &str = r#"{"title":"akl.DemoHeader","type":"object","properties":{"akl_demo":{"type":"integer"},"task":{"type":"string"},"frame":{"type":"string"},"calibration":{"type":"string"},"shapes":{"type":"object"}}}"#;
+/// `akl.Gripper`: the gripper's state in one frame.
+#[derive(Serialize)]
+struct GripperState {
+    /// `open` or `closed`.
+    state: &'static str,
+}
+
+impl Schema for GripperState {
+    fn schema() -> Value {
+        object(&[(
+            "state",
+            json!({"type": "string", "enum": ["open", "closed"]}),
+        )])
+    }
+}
+
+impl Message for GripperState {
+    const NAME: &'static str = "akl.Gripper";
+}
+
+/// `akl.Detector`: whether the online detector saw a straight line in one frame.
+#[derive(Serialize)]
+struct DetectorState {
+    /// The detector's state.
+    constrained: bool,
+}
+
+impl Schema for DetectorState {
+    fn schema() -> Value {
+        object(&[("constrained", boolean())])
+    }
+}
+
+impl Message for DetectorState {
+    const NAME: &'static str = "akl.Detector";
+}
+
+impl Schema for DemoHeader {
+    fn schema() -> Value {
+        object_with_optional(
+            &[
+                ("akl_demo", integer()),
+                ("task", string()),
+                ("frame", string()),
+            ],
+            &[
+                ("calibration", string()),
+                ("shapes", json!({"type": "object"})),
+            ],
+        )
+    }
+}
+
+impl Message for DemoHeader {
+    const NAME: &'static str = "akl.DemoHeader";
+}
 
 /// Streams a demonstration into an MCAP file.
 pub struct McapDemoWriter<W: Write + Seek> {
-    writer: mcap::Writer<W>,
-    ee: u16,
-    objects: Vec<u16>,
-    gripper: u16,
-    detector: u16,
-    dialogue: u16,
-    sequence: u32,
+    writer: McapWriter<W>,
+    ee: Channel<PoseInFrame>,
+    objects: Vec<Channel<PoseInFrame>>,
+    gripper: Channel<GripperState>,
+    detector: Channel<DetectorState>,
+    dialogue: Channel<Log>,
     last_flush_time: f64,
     last_flush_clock: Instant,
 }
 
-fn mcap_error(e: mcap::McapError) -> std::io::Error {
-    std::io::Error::other(e.to_string())
+fn write_error(e: akl_foxglove::WriteError) -> std::io::Error {
+    std::io::Error::other(e)
 }
 
-fn nanos(t: f64) -> u64 {
-    (t.max(0.0) * 1e9).round() as u64
-}
-
-fn stamp(t: f64) -> Value {
-    let ns = nanos(t);
-    json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
-}
-
-fn pose_message(t: f64, frame: &str, pose: &Pose) -> Value {
-    let p = pose.translation.vector;
-    let q = pose.rotation.coords;
-    json!({"timestamp": stamp(t), "frame_id": frame,
-           "pose": {"position": {"x": p.x, "y": p.y, "z": p.z},
-                    "orientation": {"x": q.x, "y": q.y, "z": q.z, "w": q.w}}})
+fn pose_message(t: f64, frame: &str, pose: &Pose) -> PoseInFrame {
+    PoseInFrame {
+        timestamp: Time::at(t),
+        frame_id: frame.to_string(),
+        pose: pose.into(),
+    }
 }
 
 impl<W: Write + Seek> McapDemoWriter<W> {
     /// Starts a recording of `header` with the named objects.
     pub fn new(out: W, header: &DemoHeader, objects: &[String]) -> std::io::Result<Self> {
         let options = mcap::WriteOptions::new().profile("akl").chunk_size(None);
-        let mut writer = options.create(out).map_err(mcap_error)?;
-        let none = BTreeMap::new();
-        let pose = writer
-            .add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes())
-            .map_err(mcap_error)?;
-        let log = writer
-            .add_schema("foxglove.Log", "jsonschema", LOG_SCHEMA.as_bytes())
-            .map_err(mcap_error)?;
-        let grip = writer
-            .add_schema("akl.Gripper", "jsonschema", GRIPPER_SCHEMA.as_bytes())
-            .map_err(mcap_error)?;
-        let det = writer
-            .add_schema("akl.Detector", "jsonschema", DETECTOR_SCHEMA.as_bytes())
-            .map_err(mcap_error)?;
-        let head = writer
-            .add_schema("akl.DemoHeader", "jsonschema", HEADER_SCHEMA.as_bytes())
-            .map_err(mcap_error)?;
+        let mut writer = McapWriter::new(out, options).map_err(write_error)?;
         let header_channel = writer
-            .add_channel(head, "/akl/header", "json", &none)
-            .map_err(mcap_error)?;
-        let ee = writer
-            .add_channel(pose, "/ee", "json", &none)
-            .map_err(mcap_error)?;
-        let mut object_channels = Vec::with_capacity(objects.len());
-        for name in objects {
-            object_channels.push(
-                writer
-                    .add_channel(pose, &format!("/objects/{name}"), "json", &none)
-                    .map_err(mcap_error)?,
-            );
-        }
-        let gripper = writer
-            .add_channel(grip, "/gripper", "json", &none)
-            .map_err(mcap_error)?;
-        let detector = writer
-            .add_channel(det, "/detector", "json", &none)
-            .map_err(mcap_error)?;
-        let dialogue = writer
-            .add_channel(log, "/dialogue", "json", &none)
-            .map_err(mcap_error)?;
+            .channel::<DemoHeader>("/akl/header")
+            .map_err(write_error)?;
+        let ee = writer.channel("/ee").map_err(write_error)?;
+        let object_channels = objects
+            .iter()
+            .map(|name| writer.channel(&format!("/objects/{name}")))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(write_error)?;
+        let gripper = writer.channel("/gripper").map_err(write_error)?;
+        let detector = writer.channel("/detector").map_err(write_error)?;
+        let dialogue = writer.channel("/dialogue").map_err(write_error)?;
         let mut metadata = BTreeMap::new();
         metadata.insert("task".to_string(), header.task.clone());
         metadata.insert("frame".to_string(), header.frame.clone());
@@ -119,45 +135,21 @@ impl<W: Write + Seek> McapDemoWriter<W> {
         if let Some(c) = &header.calibration {
             metadata.insert("calibration".to_string(), c.clone());
         }
+        writer.metadata("akl_demo", metadata).map_err(write_error)?;
         writer
-            .write_metadata(&mcap::records::Metadata {
-                name: "akl_demo".into(),
-                metadata,
-            })
-            .map_err(mcap_error)?;
-        let mut this = McapDemoWriter {
+            .write(header_channel, 0.0, header)
+            .map_err(write_error)?;
+        writer.flush().map_err(write_error)?;
+        Ok(McapDemoWriter {
             writer,
             ee,
             objects: object_channels,
             gripper,
             detector,
             dialogue,
-            sequence: 0,
             last_flush_time: 0.0,
             last_flush_clock: Instant::now(),
-        };
-        let header_json = serde_json::to_vec(header).map_err(std::io::Error::other)?;
-        this.send(header_channel, 0.0, &header_json)?;
-        this.writer.flush().map_err(mcap_error)?;
-        Ok(this)
-    }
-
-    fn send(&mut self, channel: u16, t: f64, data: &[u8]) -> std::io::Result<()> {
-        self.sequence += 1;
-        let header = mcap::records::MessageHeader {
-            channel_id: channel,
-            sequence: self.sequence,
-            log_time: nanos(t),
-            publish_time: nanos(t),
-        };
-        self.writer
-            .write_to_known_channel(&header, data)
-            .map_err(mcap_error)
-    }
-
-    fn send_json(&mut self, channel: u16, t: f64, value: &Value) -> std::io::Result<()> {
-        let bytes = serde_json::to_vec(value).map_err(std::io::Error::other)?;
-        self.send(channel, t, &bytes)
+        })
     }
 
     /// Closes the chunk if a second of demonstration or wall-clock time has passed.
@@ -165,7 +157,7 @@ impl<W: Write + Seek> McapDemoWriter<W> {
         if t - self.last_flush_time >= FLUSH_INTERVAL.as_secs_f64()
             || self.last_flush_clock.elapsed() >= FLUSH_INTERVAL
         {
-            self.writer.flush().map_err(mcap_error)?;
+            self.writer.flush().map_err(write_error)?;
             self.last_flush_time = t;
             self.last_flush_clock = Instant::now();
         }
@@ -176,19 +168,23 @@ impl<W: Write + Seek> McapDemoWriter<W> {
     pub fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
         let t = demo.times[i];
         self.maybe_flush(t)?;
-        let frame = demo.header.frame.clone();
-        self.send_json(self.ee, t, &pose_message(t, &frame, &demo.ee[i]))?;
-        for k in 0..self.objects.len() {
-            let message = pose_message(t, &frame, &demo.objects[k].poses[i]);
-            self.send_json(self.objects[k], t, &message)?;
+        let frame = &demo.header.frame;
+        let w = &mut self.writer;
+        w.write(self.ee, t, &pose_message(t, frame, &demo.ee[i]))
+            .map_err(write_error)?;
+        for (channel, track) in self.objects.iter().zip(&demo.objects) {
+            w.write(*channel, t, &pose_message(t, frame, &track.poses[i]))
+                .map_err(write_error)?;
         }
         let state = match demo.gripper[i] {
             Gripper::Open => "open",
             Gripper::Closed => "closed",
         };
-        self.send_json(self.gripper, t, &json!({"state": state}))?;
-        if let Some(c) = demo.detector.get(i) {
-            self.send_json(self.detector, t, &json!({"constrained": c}))?;
+        w.write(self.gripper, t, &GripperState { state })
+            .map_err(write_error)?;
+        if let Some(&constrained) = demo.detector.get(i) {
+            w.write(self.detector, t, &DetectorState { constrained })
+                .map_err(write_error)?;
         }
         Ok(())
     }
@@ -201,8 +197,10 @@ impl<W: Write + Seek> McapDemoWriter<W> {
             DialogueKind::Suggestion => ("akl.suggestion", SUGGESTION.to_string()),
             DialogueKind::Keyframe => ("akl.keyframe", "keyframe".to_string()),
         };
-        let value = json!({"timestamp": stamp(event.t), "level": 2, "message": message, "name": name, "file": "", "line": 0});
-        self.send_json(self.dialogue, event.t, &value)
+        let line = Log::new(event.t, LogLevel::Info, name, message);
+        self.writer
+            .write(self.dialogue, event.t, &line)
+            .map_err(write_error)
     }
 
     /// Writes a whole demonstration and finishes the file.
@@ -212,9 +210,8 @@ impl<W: Write + Seek> McapDemoWriter<W> {
     }
 
     /// Writes the summary and returns the underlying writer.
-    pub fn finish(mut self) -> std::io::Result<W> {
-        self.writer.finish().map_err(mcap_error)?;
-        Ok(self.writer.into_inner())
+    pub fn finish(self) -> std::io::Result<W> {
+        self.writer.finish().map_err(write_error)
     }
 }
 
@@ -260,9 +257,7 @@ impl std::fmt::Display for Truncation {
 /// Reads an MCAP demonstration; a truncated file gives what its complete chunks hold plus a
 /// [`Truncation`] report.
 pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> {
-    let stream =
-        mcap::MessageStream::new_with_options(bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| DemoError::Format(format!("not an MCAP file: {e}")))?;
+    let stream = crate::mcap_read::messages(bytes, true);
     let mut header: Option<DemoHeader> = None;
     let mut frames: BTreeMap<u64, PartialFrame> = BTreeMap::new();
     let mut events: Vec<(f64, DialogueKind)> = Vec::new();
@@ -523,6 +518,22 @@ mod tests {
         assert!(back.times.last().unwrap() + 1.0 + full_duration / 3.0 + 1.0 >= full_duration);
         assert!(back.ee.iter().zip(&demo.ee).all(|(a, b)| close(a, b)));
         assert!(truncation.to_string().contains("recovered"));
+    }
+
+    #[test]
+    fn every_message_fits_the_schema_written_beside_it() {
+        let mut demo = recorded();
+        demo.header.calibration = Some("default".into());
+        let counts = akl_foxglove::check_mcap(&write(&demo)).unwrap();
+        assert_eq!(counts["/akl/header"], 1);
+        for topic in ["/ee", "/gripper", "/detector"] {
+            assert_eq!(counts[topic], demo.len(), "{topic}");
+        }
+        for o in &demo.objects {
+            assert_eq!(counts[&format!("/objects/{}", o.name)], demo.len());
+        }
+        assert!(!demo.events.is_empty());
+        assert_eq!(counts["/dialogue"], demo.events.len());
     }
 
     #[test]
