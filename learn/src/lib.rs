@@ -13,6 +13,7 @@ pub mod jsonl;
 pub mod line_error;
 pub mod live;
 pub mod mcap_io;
+mod mcap_read;
 pub mod measures;
 pub mod method;
 pub mod okl;
