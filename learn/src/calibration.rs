@@ -335,20 +335,22 @@ impl Calibration {
         akl_tsr::io::write_atomic(path, text.as_bytes())
     }
 
-    /// Reads a calibration file.
+    /// Reads a calibration file; errors name it.
     pub fn load(path: &Path) -> Result<Calibration, CalibrationError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| CalibrationError::Invalid(format!("{}: {e}", path.display())))?;
-        let calibration: Calibration = serde_json::from_str(&text).map_err(|e| {
-            let (line, column, message) = akl_tsr::error::describe_json_error(&e, &text);
-            CalibrationError::Invalid(format!(
-                "{}: line {line}, column {column}: {message}",
-                path.display()
-            ))
+        Calibration::from_json(&text)
+            .map_err(|e| CalibrationError::Invalid(format!("{}: {e}", path.display())))
+    }
+
+    /// Parses and validates a calibration from the JSON text of a calibration file; a syntax
+    /// error names the line and column.
+    pub fn from_json(text: &str) -> Result<Calibration, CalibrationError> {
+        let calibration: Calibration = serde_json::from_str(text).map_err(|e| {
+            let (line, column, message) = akl_tsr::error::describe_json_error(&e, text);
+            CalibrationError::Invalid(format!("line {line}, column {column}: {message}"))
         })?;
-        calibration
-            .validate()
-            .map_err(|e| CalibrationError::Invalid(format!("{}: {e}", path.display())))?;
+        calibration.validate()?;
         Ok(calibration)
     }
 
@@ -556,5 +558,21 @@ mod tests {
             ..Calibration::default()
         };
         assert_eq!(leaky.validate(), Err(CalibrationError::Tank));
+    }
+
+    #[test]
+    fn calibration_text_reads_back_and_errors_say_where_or_which_rule() {
+        let text = akl_tsr::io::to_readable_json(&Calibration::default()).unwrap();
+        assert_eq!(Calibration::from_json(&text), Ok(Calibration::default()));
+        let Err(CalibrationError::Invalid(message)) = Calibration::from_json("{\n  \"beta0\": x")
+        else {
+            panic!("a syntax error is Invalid");
+        };
+        assert!(message.starts_with("line 2, column "), "{message}");
+        let old = text.replace("\"akl_calibration\": 2", "\"akl_calibration\": 1");
+        assert_eq!(
+            Calibration::from_json(&old),
+            Err(CalibrationError::Version(1))
+        );
     }
 }
