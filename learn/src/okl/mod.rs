@@ -19,6 +19,9 @@ pub mod line;
 pub mod pass_over;
 pub mod reference;
 pub mod segment;
+// Synthetic demonstrations for the unit tests, and with the `synth` feature (which the crate's
+// own dev-dependency turns on) for its integration tests and benchmarks.
+#[cfg(any(test, feature = "synth"))]
 pub mod synth;
 
 use crate::calibration::Calibration;
