@@ -234,6 +234,123 @@ mod tests {
         assert_eq!(five_numbers(&[0.0, 10.0]), Some([0.0, 2.5, 5.0, 7.5, 10.0]));
     }
 
+    /// A trial of `method` on `task` with `missed` keyframes missed.
+    fn trial(task: &str, method: Method, missed: usize) -> Trial {
+        Trial {
+            participant: 1,
+            experienced: false,
+            method,
+            position: 1,
+            task: task.into(),
+            seed: 0,
+            frames: 10,
+            duration_s: 0.1,
+            unintended_line_chance: 0.0,
+            unintended_lines: 0,
+            queries: 0,
+            yes: 0,
+            no: 0,
+            unknown: 0,
+            suggestions: 0,
+            errors_from_answers: 0,
+            errors_avoided: 0,
+            marks: 0,
+            learn_error: None,
+            learned_keyframes: 4,
+            truth_keyframes: 4,
+            missed_keyframes: missed,
+            incorrect_keyframes: 0,
+            keyframe_accuracy: 1.0,
+            missed_poses: 0,
+            incorrect_poses: 0,
+            pose_accuracy: 1.0,
+            missed_line_length: 0.0,
+            incorrect_line_length: 0.0,
+            constraint_accuracy: None,
+            missed_constraints: 0,
+            incorrect_constraints: 0,
+            success: true,
+            runtime_s: 0.01,
+            executions: None,
+            passed_executions: None,
+            pass_rate: None,
+            execute_error: None,
+            spec: None,
+        }
+    }
+
+    /// The numbers of attribute `name` in the SVG elements starting `<element` that also hold
+    /// `with`.
+    fn attribute(svg: &str, element: &str, with: &str, name: &str) -> Vec<Vec<f64>> {
+        let key = format!(" {name}=\"");
+        svg.lines()
+            .filter(|l| l.starts_with(&format!("<{element} ")) && l.contains(with))
+            .map(|l| {
+                let from = l.find(&key).unwrap() + key.len();
+                let value = &l[from..from + l[from..].find('"').unwrap()];
+                value
+                    .split([',', ' '])
+                    .filter(|v| !v.is_empty())
+                    .map(|v| v.parse().unwrap())
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The figure holds its title, axis label, method and task labels, one point per trial in
+    /// its task's colour, and a median bar per method with trials, at the median's height.
+    #[test]
+    fn a_figure_draws_every_trial_and_each_methods_median() {
+        let mut trials = Vec::new();
+        // Medians 1 (AKL) and 5 (KD), means 13/6 and 29/6.
+        for (task, akl, kd) in [("a", [0, 0, 1], [4, 4, 5]), ("b", [1, 2, 9], [5, 5, 6])] {
+            for (a, k) in akl.into_iter().zip(kd) {
+                trials.push(trial(task, Method::Akl, a));
+                trials.push(trial(task, Method::Kd, k));
+            }
+        }
+        let svg = draw(&FIGURES[0], &trials, &["a".into(), "b".into()]).unwrap();
+        let texts: Vec<&str> = svg
+            .split("</text>")
+            .filter_map(|t| t.rsplit_once('>').map(|(_, text)| text.trim()))
+            .collect();
+        for label in [FIGURES[0].title, "keyframes", "AKL", "KD", "mACL", "a", "b"] {
+            assert!(texts.contains(&label), "no {label:?} in {texts:?}");
+        }
+        // Six trials per task, and the legend's mark.
+        for colour in ["#1F77B4", "#FF7F0E"] {
+            assert_eq!(attribute(&svg, "circle", colour, "cy").len(), 7, "{colour}");
+        }
+        // The value axis from the points (the legend's mark is drawn last): task b's highest
+        // is 9 missed keyframes, task a's lowest 0.
+        let b: Vec<f64> = attribute(&svg, "circle", "#FF7F0E", "cy")[..6]
+            .iter()
+            .map(|v| v[0])
+            .collect();
+        let zero = attribute(&svg, "circle", "#1F77B4", "cy")[..6]
+            .iter()
+            .map(|v| v[0])
+            .fold(f64::MIN, f64::max);
+        let per_unit = (zero - b.iter().cloned().fold(f64::MAX, f64::min)) / 9.0;
+        assert!(per_unit > 10.0, "{per_unit}");
+        // No trials of mACL: two median bars, KD's (drawn left of AKL's) at 5, AKL's at 1.
+        let place = |m: Method| TABLE_ORDER.iter().position(|t| *t == m).unwrap();
+        assert!(place(Method::Kd) < place(Method::Akl));
+        let mut medians = attribute(&svg, "polyline", "stroke-width=\"3\"", "points");
+        medians.sort_by(|p, q| p[0].total_cmp(&q[0]));
+        let [kd_median, akl_median] = &medians[..] else {
+            panic!("{medians:?}");
+        };
+        assert!(
+            (zero - akl_median[1] - per_unit).abs() <= 1.5,
+            "{akl_median:?}"
+        );
+        assert!(
+            (zero - kd_median[1] - 5.0 * per_unit).abs() <= 1.5,
+            "{kd_median:?}"
+        );
+    }
+
     #[test]
     fn every_figure_draws_an_svg_even_without_trials() {
         for f in &FIGURES {
