@@ -257,7 +257,8 @@ impl std::fmt::Display for Truncation {
 /// Reads an MCAP demonstration; a truncated file gives what its complete chunks hold plus a
 /// [`Truncation`] report.
 pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> {
-    let stream = crate::mcap_read::messages(bytes, true);
+    let stream = crate::mcap_read::messages(bytes, true)
+        .map_err(|e| DemoError::Format(format!("a damaged MCAP file: {e}")))?;
     let mut header: Option<DemoHeader> = None;
     let mut frames: BTreeMap<u64, PartialFrame> = BTreeMap::new();
     let mut events: Vec<(f64, DialogueKind)> = Vec::new();

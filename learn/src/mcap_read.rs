@@ -2,15 +2,21 @@
 //!
 //! mcap's `MessageStream` reads with no bound on a record's length: a record or a chunk's
 //! record that claims petabytes makes it allocate them (the process aborts) or overflow an
-//! addition (it panics) before it finds the bytes are not there. Found by the `demo_mcap` and
-//! `ros2_bag` fuzz targets (`fuzz/`). [`messages`] reads through mcap's streaming reader with
-//! every record, chunk and decompressed chunk bounded by [`record_limit`], so such a file is
-//! an error like any other damage.
+//! addition (it panics) before it finds the bytes are not there. And a record of an
+//! uncompressed chunk that runs past the chunk's end makes it subtract past zero (a panic with
+//! overflow checks, reading on with garbage without). Found by the `demo_mcap` and `ros2_bag`
+//! fuzz targets (`fuzz/`). [`messages`] first checks every uncompressed chunk's records end
+//! where the chunk does, then reads through mcap's streaming reader with every record, chunk
+//! and decompressed chunk bounded by [`record_limit`], so such a file is an error like any
+//! other damage.
 
 use std::io::Cursor;
 
 use mcap::io::MessageReader;
+use mcap::read::{LinearReader, Options};
+use mcap::records::Record;
 use mcap::sans_io::LinearReaderOptions;
+use mcap::McapError;
 
 /// How many times its file's size a record may hold once decompressed: chunks of recorded
 /// poses and joint states compress a few times, nowhere near this.
@@ -27,12 +33,50 @@ fn record_limit(len: usize) -> usize {
 
 /// The messages of the MCAP file `bytes` in file order, each linked to its channel; a record
 /// longer than [`record_limit`] is an error. With `to_data_end` the stream ends at the data
-/// end record and a missing end magic is no error (a recording cut short).
-pub(crate) fn messages(bytes: &[u8], to_data_end: bool) -> MessageReader<Cursor<&[u8]>> {
+/// end record and a missing end magic is no error (a recording cut short). A complete chunk
+/// whose records run past its end is refused before any message is read.
+pub(crate) fn messages(
+    bytes: &[u8],
+    to_data_end: bool,
+) -> Result<MessageReader<Cursor<&[u8]>>, McapError> {
+    check_chunk_records(bytes)?;
     let options = LinearReaderOptions::default()
         .with_record_length_limit(record_limit(bytes.len()))
         .with_skip_end_magic(to_data_end);
-    MessageReader::new_with_options(Cursor::new(bytes), options)
+    Ok(MessageReader::new_with_options(Cursor::new(bytes), options))
+}
+
+/// Checks that the records of every complete uncompressed chunk end where the chunk does
+/// (compressed chunks mcap checks as it decompresses them). Stops quietly at the first record
+/// it cannot read: the message stream meets that one and reports it, as it does a file cut
+/// short.
+fn check_chunk_records(bytes: &[u8]) -> Result<(), McapError> {
+    for record in LinearReader::new_with_options(bytes, Options::IgnoreEndMagic.into())? {
+        match record {
+            Ok(Record::Chunk { header, data }) if header.compression.is_empty() => {
+                records_fit(&data)?;
+            }
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    Ok(())
+}
+
+/// Whether `records` (an opcode, a little-endian u64 length and that many bytes, again and
+/// again) ends exactly after its last record.
+fn records_fit(mut records: &[u8]) -> Result<(), McapError> {
+    while let Some((_opcode, rest)) = records.split_first() {
+        let (length, rest) = rest
+            .split_first_chunk::<8>()
+            .ok_or(McapError::UnexpectedEoc)?;
+        let length = usize::try_from(u64::from_le_bytes(*length))
+            .ok()
+            .filter(|&length| length <= rest.len())
+            .ok_or(McapError::UnexpectedEoc)?;
+        records = &rest[length..];
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -45,7 +89,7 @@ mod tests {
 
     #[test]
     fn a_record_longer_than_the_bound_is_an_error() {
-        let first = messages(ENDLESS_RECORD, true).next();
+        let first = messages(ENDLESS_RECORD, true).unwrap().next();
         assert!(
             matches!(first, Some(Err(mcap::McapError::RecordTooLarge { .. }))),
             "{first:?}"
@@ -83,11 +127,57 @@ mod tests {
     #[test]
     fn a_compressed_record_longer_than_the_bound_is_an_error() {
         let file = chunk_with_a_huge_record();
-        let first = messages(&file, true).next();
+        let first = messages(&file, true).unwrap().next();
         assert!(
             matches!(first, Some(Err(mcap::McapError::RecordTooLarge { .. }))),
             "{first:?}"
         );
+    }
+
+    /// A file whose one uncompressed chunk holds a record claiming 1 KiB in 9 bytes: mcap's
+    /// reader subtracted the length from what was left of the chunk and overflowed (the
+    /// `demo_mcap` fuzz target's third find).
+    fn chunk_with_a_record_past_its_end() -> Vec<u8> {
+        let mut records = vec![0x05]; // a message record's opcode, then its length
+        records.extend_from_slice(&1024u64.to_le_bytes());
+        let mut chunk = Vec::new();
+        chunk.extend_from_slice(&[0; 16]); // first and last message times
+        chunk.extend_from_slice(&(records.len() as u64).to_le_bytes());
+        chunk.extend_from_slice(&0u32.to_le_bytes()); // no CRC
+        chunk.extend_from_slice(&0u32.to_le_bytes()); // no compression
+        chunk.extend_from_slice(&(records.len() as u64).to_le_bytes());
+        chunk.extend_from_slice(&records);
+        let mut file = b"\x89MCAP0\r\n".to_vec();
+        file.push(0x06); // the chunk record's opcode, then its length
+        file.extend_from_slice(&(chunk.len() as u64).to_le_bytes());
+        file.extend_from_slice(&chunk);
+        // Another record after the chunk, which the reader took for the rest of the record.
+        file.extend_from_slice(&[0x0f; 1100]);
+        file
+    }
+
+    #[test]
+    fn an_uncompressed_chunk_whose_record_runs_past_its_end_is_refused() {
+        let file = chunk_with_a_record_past_its_end();
+        assert!(matches!(
+            messages(&file, true),
+            Err(McapError::UnexpectedEoc)
+        ));
+    }
+
+    #[test]
+    fn records_fit_only_when_the_last_one_ends_the_chunk() {
+        let record = |length: u64, body: usize| {
+            let mut r = vec![0x05];
+            r.extend_from_slice(&length.to_le_bytes());
+            r.extend(std::iter::repeat_n(0u8, body));
+            r
+        };
+        assert!(records_fit(&[]).is_ok());
+        assert!(records_fit(&[record(3, 3), record(0, 0)].concat()).is_ok());
+        assert!(records_fit(&record(4, 3)).is_err());
+        assert!(records_fit(&record(u64::MAX, 3)).is_err());
+        assert!(records_fit(&record(3, 3)[..5]).is_err());
     }
 
     #[test]

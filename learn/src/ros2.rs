@@ -308,7 +308,8 @@ pub fn import_ros2(bytes: &[u8], topics: &Ros2Topics) -> Result<Demo, DemoError>
             "not an MCAP file (a ROS 2 bag in MCAP format)".into(),
         ));
     }
-    let stream = crate::mcap_read::messages(bytes, false);
+    let stream = crate::mcap_read::messages(bytes, false)
+        .map_err(|e| DemoError::Format(format!("reading the bag: {e}")))?;
     let names: Vec<String> = topics.objects.iter().map(|(n, _)| n.clone()).collect();
     let header = DemoHeader {
         frame: topics.frame.clone(),
