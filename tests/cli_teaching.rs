@@ -4,8 +4,7 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Child, ChildStdin, Command, Stdio};
 
 mod common;
 use common::*;
@@ -263,48 +262,101 @@ fn questions_are_answered_on_the_terminal() {
     assert!(recorded.contains("\"event\":\"answer\",\"value\":\"yes\""));
 }
 
-fn wait_for(path: &Path, bytes: u64) {
-    let start = Instant::now();
-    while std::fs::metadata(path).map_or(0, |m| m.len()) < bytes {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "{} never grew",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+/// A driver streaming inspection's demonstration into `akl teach --teacher stdin`, recording
+/// into an MCAP file, paced by the test: nothing here waits for the clock.
+struct Driver {
+    child: Child,
+    stdin: ChildStdin,
+    /// The stream's lines not fed yet.
+    rest: std::vec::IntoIter<String>,
+    /// The last frame fed, as JSON.
+    last: serde_json::Value,
 }
 
-/// Starts a real-time simulated teaching of `inspection` into `dir/out` and returns once about
-/// six seconds of it are recorded (past the grasp at 4.6 s), with the seconds since start.
-fn teach_for_six_seconds(dir: &Path, out: &str) -> (Child, f64) {
-    let child = Command::new(env!("CARGO_BIN_EXE_akl"))
-        .args([
-            "teach",
-            "--task",
-            "inspection",
-            "--realtime",
-            "-o",
-            out,
-            "--json",
-        ])
-        .current_dir(dir)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
-    wait_for(&dir.join(format!("{out}.partial")), 1);
-    std::thread::sleep(Duration::from_secs(6));
-    (child, started.elapsed().as_secs_f64())
+impl Driver {
+    /// Starts the recording into `dir/out` and feeds the stream's header and its frames up to
+    /// `until` seconds (with their keyframe marks).
+    fn start(dir: &Path, out: &str, until: f64) -> Driver {
+        let stream = driver_stream(dir, "inspection");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_akl"))
+            .args([
+                "teach",
+                "--teacher",
+                "stdin",
+                "--answers",
+                "all-yes",
+                "-o",
+                out,
+                "--json",
+            ])
+            .current_dir(dir)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stdin = child.stdin.take().unwrap();
+        let lines: Vec<String> = stream.lines().map(str::to_string).collect();
+        let mut driver = Driver {
+            child,
+            stdin,
+            rest: lines.into_iter(),
+            last: serde_json::Value::Null,
+        };
+        while driver.last["t"].as_f64().is_none_or(|t| t < until) {
+            assert!(driver.feed_one(), "the stream ended before {until} s");
+        }
+        driver
+    }
+
+    /// Feeds the next line of the stream, or once it is all fed, the last frame again 10 ms
+    /// later; false when the recorder no longer reads.
+    fn feed_one(&mut self) -> bool {
+        let line = match self.rest.next() {
+            Some(line) => line,
+            None => {
+                let t = self.last["t"].as_f64().unwrap() + 0.01;
+                self.last["t"] = serde_json::json!(t);
+                self.last.to_string()
+            }
+        };
+        if let Ok(value) = serde_json::from_str::<serde_json::Value>(&line) {
+            if value.get("t").is_some() {
+                self.last = value;
+            }
+        }
+        self.stdin
+            .write_all(format!("{line}\n").as_bytes())
+            .and_then(|()| self.stdin.flush())
+            .is_ok()
+    }
+
+    /// Waits until the recording `path` holds, in complete chunks, frames up to `seconds`, and
+    /// returns how many frames it holds. The recorder flushes as it goes, so this is a matter
+    /// of it catching up with the frames fed; it fails if the recorder exits.
+    fn recorded_until(&mut self, path: &Path, seconds: f64) -> usize {
+        loop {
+            if let Ok(loaded) = akl_learn::recording::read_demo_file(path) {
+                if loaded.demo.times.last().is_some_and(|t| *t >= seconds) {
+                    return loaded.demo.len();
+                }
+            }
+            if let Some(status) = self.child.try_wait().unwrap() {
+                panic!("the recorder exited ({status}) before {seconds} s were recorded");
+            }
+            std::thread::yield_now();
+        }
+    }
 }
 
 #[test]
 fn a_killed_recording_keeps_all_but_its_last_second() {
     let dir = scratch("kill");
-    let (mut child, before_kill) = teach_for_six_seconds(&dir, "k.mcap");
-    child.kill().unwrap();
-    child.wait().unwrap();
+    // Six seconds fed (past the grasp at 4.6 s); the recorder closes a chunk every second.
+    let mut driver = Driver::start(&dir, "k.mcap", 6.0);
+    let flushed = driver.recorded_until(&dir.join("k.mcap.partial"), 4.9);
+    driver.child.kill().unwrap();
+    driver.child.wait().unwrap();
     assert!(!dir.join("k.mcap").exists());
     let o = akl_in(
         &dir,
@@ -312,20 +364,33 @@ fn a_killed_recording_keeps_all_but_its_last_second() {
     );
     assert!(o.status.success(), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("truncated"), "{}", text(&o.stderr));
-    let frames = json(&o)["frames"].as_u64().unwrap() as f64;
-    // 100 Hz: everything but the last second (and the start-up before the first frame).
+    // Nothing written before the kill is lost: at least the 4.9 s seen, at 100 Hz.
+    let frames = json(&o)["frames"].as_u64().unwrap() as usize;
     assert!(
-        frames / 100.0 >= before_kill - 2.5,
-        "{frames} frames after {before_kill} s"
+        frames >= flushed && flushed >= 490,
+        "{frames} frames, {flushed} seen"
     );
 }
 
 #[test]
 fn ctrl_c_ends_a_recording_cleanly() {
     let dir = scratch("sigint");
-    let (child, _) = teach_for_six_seconds(&dir, "c.mcap");
+    let mut driver = Driver::start(&dir, "c.mcap", 6.0);
+    driver.recorded_until(&dir.join("c.mcap.partial"), 4.9);
     // SAFETY: sending a signal to our own child process.
-    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    assert_eq!(
+        unsafe { libc::kill(driver.child.id() as i32, libc::SIGINT) },
+        0
+    );
+    // The recorder looks at the flag between frames: feed frames until it stops reading (the
+    // stream's own, then its last frame held).
+    let mut fed = 0;
+    while driver.feed_one() {
+        fed += 1;
+        assert!(fed < 1_000_000, "the recorder never stopped");
+    }
+    let Driver { child, stdin, .. } = driver;
+    drop(stdin);
     let o = child.wait_with_output().unwrap();
     assert!(o.status.success(), "{}", text(&o.stderr));
     assert_eq!(json(&o)["stopped_early"], true);

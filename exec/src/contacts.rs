@@ -409,6 +409,146 @@ impl ContactLog {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::world::Physics;
+    use akl_planner::contact_rules::Step;
+
+    /// pick_place in the simulation, the Panda's contact roles there, and a hand link, an arm
+    /// link and a base link.
+    fn pick_place() -> (SimWorld, ContactRoles, [usize; 3]) {
+        let robot = Robot::panda().unwrap();
+        let world = akl_scene::builtin::task("pick_place")
+            .unwrap()
+            .unwrap()
+            .world;
+        let sim = SimWorld::new(&world, &Physics::default());
+        let roles = ContactRoles::new(&robot, &world);
+        let hand = robot.hand_links()[0];
+        let base = robot.mount_links()[0];
+        let arm = (0..robot.links().len())
+            .find(|l| !robot.hand_links().contains(l) && !robot.mount_links().contains(l))
+            .unwrap();
+        (sim, roles, [hand, arm, base])
+    }
+
+    fn context<'a>(allow: &'a Allowances, held: Option<usize>) -> StepContext<'a> {
+        StepContext {
+            allow,
+            held,
+            during: "a step",
+            keyframe: Some(0),
+            t: 1.0,
+        }
+    }
+
+    /// Each pair gets what `contact_rules` says of it: the hand on what it closes on grips,
+    /// the hand on anything else and the arm on anything are forbidden, the held object on
+    /// its support is allowed and on a fixture it enters brushes, the base on the table it
+    /// stands on and two objects nobody holds are not judged.
+    #[test]
+    fn contacts_are_classified_by_the_shared_rules() {
+        let (sim, roles, [hand, arm, base]) = pick_place();
+        let log = ContactLog::default();
+        let object = |n: &str| Owner::Object(sim.object_index(n).unwrap());
+        let verdict =
+            |step: &StepContext, a: Owner, b: Owner| log.classify(&sim, &roles, step, a, b);
+        let grasping = Step {
+            grasping: Some("block_a"),
+            ..Step::default()
+        }
+        .allowances();
+        let reach = context(&grasping, None);
+        let hand_name = roles.link_names[hand].clone();
+        assert_eq!(
+            verdict(&reach, Owner::Link(hand), object("block_a")),
+            Some((hand_name.clone(), "block_a".into(), Verdict::Grip))
+        );
+        assert_eq!(
+            verdict(&reach, object("block_b"), Owner::Link(hand)).map(|v| v.2),
+            Some(Verdict::Forbidden)
+        );
+        assert_eq!(
+            verdict(&reach, Owner::Link(arm), object("block_a")).map(|v| v.2),
+            Some(Verdict::Forbidden)
+        );
+        assert_eq!(verdict(&reach, Owner::Link(base), object("table")), None);
+        assert_eq!(
+            verdict(&reach, Owner::Link(base), object("shelf_1")).map(|v| v.2),
+            Some(Verdict::Forbidden)
+        );
+        assert_eq!(verdict(&reach, object("block_a"), object("mat_a")), None);
+
+        let entering = ["shelf_2".to_string()];
+        let placing = Step {
+            placing_on: Some("mat_a"),
+            beneath: Some("shelf_1"),
+            entering: &entering,
+            ..Step::default()
+        }
+        .allowances();
+        let held = sim.object_index("block_a");
+        let place = context(&placing, held);
+        assert_eq!(
+            verdict(&place, object("mat_a"), object("block_a")),
+            Some(("held block_a".into(), "mat_a".into(), Verdict::Allowed))
+        );
+        assert_eq!(
+            verdict(&place, object("block_a"), object("shelf_2")).map(|v| v.2),
+            Some(Verdict::Brush)
+        );
+        assert_eq!(
+            verdict(&place, object("block_a"), object("block_b")).map(|v| v.2),
+            Some(Verdict::Forbidden)
+        );
+        // The hand on what it holds, named as the held object's contact.
+        assert_eq!(
+            verdict(&place, Owner::Link(hand), object("block_a")),
+            Some(("held block_a".into(), hand_name, Verdict::Grip))
+        );
+        assert_eq!(verdict(&place, object("block_b"), object("mat_b")), None);
+    }
+
+    /// A pair is one collision however often it offends: first time and step kept, the
+    /// deepest and the strongest contact of it.
+    #[test]
+    fn a_pair_is_recorded_once_with_its_extremes() {
+        let allow = Allowances::default();
+        let mut log = ContactLog::default();
+        let mut step = context(&allow, None);
+        log.record(
+            "fer_hand".into(),
+            "shelf_1".into(),
+            false,
+            &step,
+            0.001,
+            3.0,
+        );
+        step.t = 2.0;
+        step.during = "later";
+        log.record(
+            "shelf_1".into(),
+            "fer_hand".into(),
+            false,
+            &step,
+            0.0005,
+            9.0,
+        );
+        log.record(
+            "fer_link4".into(),
+            "shelf_1".into(),
+            false,
+            &step,
+            0.002,
+            1.0,
+        );
+        let c = log.collisions();
+        assert_eq!(c.len(), 2);
+        assert_eq!((c[0].t, c[0].during.as_str()), (1.0, "a step"));
+        assert_eq!((c[0].depth, c[0].force), (0.001, 9.0));
+        assert_eq!(c[1].a, "fer_link4");
+        assert!(c[0]
+            .describe()
+            .contains("fer_hand touched shelf_1 at 1.00 s"));
+    }
 
     #[test]
     fn only_contacts_of_the_arm_or_the_held_object_are_judged() {

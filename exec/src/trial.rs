@@ -174,3 +174,109 @@ pub fn trial_world(
         Ok(task.world.clone())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::ExecOptions;
+    use akl_planner::Robot;
+    use akl_tsr::TaskSpec;
+
+    fn run(task: &Task, spec: &TaskSpec, world: &World) -> TrialReport {
+        run_with(task, spec, world, &ExecOptions::default(), 11)
+    }
+
+    fn run_with(
+        task: &Task,
+        spec: &TaskSpec,
+        world: &World,
+        options: &ExecOptions,
+        seed: u64,
+    ) -> TrialReport {
+        let robot = Robot::panda().unwrap();
+        let setup = Setup {
+            robot: &robot,
+            task,
+            spec,
+            options,
+        };
+        run_trial(&setup, 4, seed, world, None)
+    }
+
+    /// The ground truth on the nominal world passes, every keyframe reached and every check
+    /// recorded, with the objects placed and perceived where they were.
+    #[test]
+    fn the_truth_passes_with_every_check_recorded() {
+        let task = akl_scene::builtin::task("pick_place").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let r = run(&task, &spec, &task.world);
+        assert!(r.passed && r.failures.is_empty(), "{:?}", r.failures);
+        assert_eq!((r.trial, r.seed), (4, 11));
+        assert_eq!(r.keyframes.len(), spec.keyframes.len());
+        assert!(r.keyframes.iter().all(|k| k.reached));
+        assert_eq!(r.grasps.len(), 2);
+        assert!(r.goals.iter().all(|g| g.holds) && !r.goals.is_empty());
+        for name in ["block_a", "block_b"] {
+            let placed = r.placements[name].to_pose().unwrap();
+            let seen = r.perceived[name].to_pose().unwrap();
+            assert_eq!(placed, task.world.object(name).unwrap().pose);
+            // Perceived with noise, but near.
+            let off = (placed.translation.vector - seen.translation.vector).norm();
+            assert!(off > 0.0 && off < 0.02, "{name} perceived {off} m off");
+        }
+        assert!(r.simulated_seconds > 0.0);
+    }
+
+    /// The truth planned on a world perceived 3 cm off (seed 8): the arm knocks block_a
+    /// before it closes beside it. The checks run grasps before collisions, but the failures
+    /// come in the order they occurred: the collision first and the only root, the missed
+    /// grasp after it, the unmet goals at the end of settling last.
+    #[test]
+    fn failures_come_in_the_order_they_occurred_the_first_the_root() {
+        let task = akl_scene::builtin::task("pick_place").unwrap().unwrap();
+        let spec = task.truth.clone().unwrap();
+        let mut options = ExecOptions::default();
+        options.noise.position = 0.03;
+        let r = run_with(&task, &spec, &task.world, &options, 8);
+        assert!(!r.passed);
+        let f = &r.failures;
+        assert!(f[0].root && f[1..].iter().all(|f| !f.root), "{f:?}");
+        let times: Vec<f64> = f.iter().map(|f| f.t.unwrap()).collect();
+        assert!(times.windows(2).all(|w| w[0] <= w[1]), "{times:?}");
+        assert_eq!((f[0].cause, f[0].keyframe), (Cause::Collision, Some(0)));
+        let grasp = f
+            .iter()
+            .position(|f| f.cause == Cause::GraspFailed && f.keyframe == Some(0))
+            .expect("the grasp missed");
+        assert!(grasp > 0 && times[grasp] > times[0]);
+        let last = f.last().unwrap();
+        assert_eq!(last.cause, Cause::GoalNotMet);
+        assert_eq!(last.t, Some(r.simulated_seconds));
+    }
+
+    /// A spec that cannot be planned (inspection's part put 3 cm into the shelf): one failure,
+    /// at time 0, naming the keyframe, and nothing simulated.
+    #[test]
+    fn a_planning_failure_is_the_only_failure_at_time_zero() {
+        let task = akl_scene::builtin::task("inspection").unwrap().unwrap();
+        let mut spec = task.truth.clone().unwrap();
+        let last = spec.keyframes.len() - 1;
+        spec.keyframes[last].tsr.tw_e.translation.vector.z -= 0.03;
+        let r = run(&task, &spec, &task.world);
+        assert!(!r.passed);
+        assert_eq!(r.failures.len(), 1, "{:?}", r.failures);
+        let f = &r.failures[0];
+        assert_eq!((f.keyframe, f.t, f.root), (Some(last), Some(0.0), true));
+        assert!(matches!(
+            f.cause,
+            Cause::NoCollisionFreeGoal | Cause::Unreachable | Cause::NoPlan
+        ));
+        assert!(
+            f.detail.contains(&format!("keyframe {last}")),
+            "{}",
+            f.detail
+        );
+        assert_eq!(r.simulated_seconds, 0.0);
+        assert!(r.keyframes.is_empty() && r.grasps.is_empty());
+    }
+}

@@ -275,6 +275,59 @@ mod tests {
             .collect()
     }
 
+    /// A sink that raises `stop` once it has received frame `at`, as Ctrl-C would then.
+    struct StopAt<'a> {
+        at: usize,
+        stop: &'a AtomicBool,
+        frames: usize,
+    }
+
+    impl RecordingSink for StopAt<'_> {
+        fn frame(&mut self, _: &Demo, index: usize) -> std::io::Result<()> {
+            self.frames += 1;
+            if index >= self.at {
+                self.stop.store(true, Ordering::Relaxed);
+            }
+            Ok(())
+        }
+
+        fn event(&mut self, _: &crate::demo::DialogueEvent) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    /// The stop flag ends a played recording at the next frame, keeping what was played.
+    #[test]
+    fn the_stop_flag_ends_a_recording_keeping_what_was_played() {
+        let task = builtin::resolve("inspection").unwrap();
+        let sim = demonstrate(&task, &task.world, &TeacherProfile::careful(), 1).unwrap();
+        let stop = AtomicBool::new(false);
+        let mut sink = StopAt {
+            at: 300,
+            stop: &stop,
+            frames: 0,
+        };
+        let pace = Pace {
+            realtime: false,
+            stop: Some(&stop),
+        };
+        let (demo, stopped) = stream_demo(
+            &sim.demo,
+            session_header(&sim.demo.header, None),
+            &sim.marked_keyframes,
+            Calibration::default(),
+            &mut AllYes,
+            Some(&mut sink),
+            &pace,
+        )
+        .unwrap();
+        assert!(stopped);
+        assert!(sim.demo.len() > 600);
+        assert!(demo.len() > 300 && demo.len() < 400, "{}", demo.len());
+        assert_eq!(demo.times[..], sim.demo.times[..demo.len()]);
+        assert_eq!(sink.frames, demo.len());
+    }
+
     #[test]
     fn a_careful_teacher_is_asked_once_per_required_line() {
         for (name, lines) in [("pick_place", 0), ("inspection", 1), ("assembly", 1)] {

@@ -260,3 +260,132 @@ fn reach(setup: &Setup, sim: &SimWorld, arm: &SimArm, k: usize, t: f64) -> Keyfr
         reference,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use akl_planner::{plan_task, Robot};
+    use akl_tsr::TaskSpec;
+
+    /// pick_place's ground truth cut to its first keyframe (close on block_a), and its plan in
+    /// the nominal world.
+    fn grasp_block_a(robot: &Robot, task: &akl_scene::Task) -> (TaskSpec, Plan) {
+        let mut spec = task.truth.clone().unwrap();
+        spec.keyframes.truncate(1);
+        assert_eq!(spec.keyframes[0].reference, "block_a");
+        let plan = plan_task(robot, &spec, &task.world, &ExecOptions::default().plan).unwrap();
+        (spec, plan)
+    }
+
+    /// The gripper closes on the box between its pads: both pads on it, welded, still held at
+    /// the end, lifted with the hand, and nothing touched that should not be.
+    #[test]
+    fn a_simulated_gripper_closes_on_a_box() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("pick_place").unwrap().unwrap();
+        let (spec, plan) = grasp_block_a(&robot, &task);
+        let options = ExecOptions::default();
+        let setup = Setup {
+            robot: &robot,
+            task: &task,
+            spec: &spec,
+            options: &options,
+        };
+        let obs = simulate(&setup, &task.world, &plan, None).unwrap();
+        assert_eq!(obs.grasps.len(), 1);
+        let g = &obs.grasps[0];
+        let block = Some("block_a".to_string());
+        assert_eq!((g.keyframe, &g.intended), (0, &"block_a".to_string()));
+        assert_eq!(g.pads, [block.clone(), block]);
+        assert!(
+            g.welded && g.unsound.is_none() && g.broke_at.is_none(),
+            "{g:?}"
+        );
+        assert!(g.t > 0.0 && g.t < obs.simulated);
+        assert_eq!(obs.still_held, ["block_a"]);
+        assert_eq!(obs.contacts.collisions(), []);
+        // Reached the keyframe once, where the plan says.
+        assert_eq!(obs.reaches.len(), 1);
+        let planned = task.world.robot_base * robot.tcp_pose(&plan.sample(obs.reaches[0].t));
+        assert!(position_distance(&obs.reaches[0].tcp, &planned) < 0.005);
+        // Carried: the box ends where the hand holds it, off its mat.
+        let before = task.world.object("block_a").unwrap().pose;
+        let after = obs
+            .settled
+            .as_ref()
+            .unwrap()
+            .object("block_a")
+            .unwrap()
+            .pose;
+        let rise = after.translation.z - before.translation.z;
+        assert!(rise > 0.01, "lifted {rise} m");
+    }
+
+    /// The same plan with the box 12 cm further out: the fingers close on nothing, nothing is
+    /// welded or held.
+    #[test]
+    fn a_simulated_gripper_closes_on_nothing_where_the_box_is_not() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("pick_place").unwrap().unwrap();
+        let (spec, plan) = grasp_block_a(&robot, &task);
+        let mut world = task.world.clone();
+        let block = world.object_mut("block_a").unwrap();
+        block.pose = akl_tsr::Pose::translation(0.12, 0.0, 0.0) * block.pose;
+        let options = ExecOptions::default();
+        let setup = Setup {
+            robot: &robot,
+            task: &task,
+            spec: &spec,
+            options: &options,
+        };
+        let obs = simulate(&setup, &world, &plan, None).unwrap();
+        assert_eq!(obs.grasps.len(), 1);
+        let g = &obs.grasps[0];
+        assert_eq!(g.pads, [None, None], "{g:?}");
+        assert!(!g.welded && g.measure.is_none());
+        assert!(obs.still_held.is_empty());
+        let moved = world.object("block_a").unwrap().pose.translation.vector;
+        let after = obs
+            .settled
+            .as_ref()
+            .unwrap()
+            .object("block_a")
+            .unwrap()
+            .pose;
+        assert!(
+            (after.translation.vector - moved).norm() < 0.002,
+            "left where it was"
+        );
+    }
+
+    #[test]
+    fn keyframes_are_reached_at_the_end_of_the_motion_leading_to_them() {
+        let robot = Robot::panda().unwrap();
+        let task = akl_scene::builtin::task("pick_place").unwrap().unwrap();
+        let (spec, plan) = grasp_block_a(&robot, &task);
+        let times = reach_times(&plan, spec.keyframes.len());
+        let last_motion = plan
+            .segments
+            .iter()
+            .filter(|s| s.keyframe == 0)
+            .filter(|s| {
+                matches!(
+                    s.kind,
+                    SegmentKind::Free | SegmentKind::Approach | SegmentKind::Line
+                )
+            })
+            .map(|s| s.end)
+            .fold(f64::MIN, f64::max);
+        assert_eq!(times, [Some(last_motion)]);
+        assert!(plan.segments.iter().any(|s| s.kind == SegmentKind::Lift));
+        assert_eq!(segment_label(SegmentKind::Lift, 0), "lift after keyframe 0");
+        // The planned velocity is the plan's slope: (nearly) zero where it comes to rest.
+        let end = planned_velocity(&plan, plan.duration);
+        assert!(end.iter().all(|v| v.abs() < 1e-3), "{end:?}");
+        let mid = plan.segments[0].start + 0.5 * (plan.segments[0].end - plan.segments[0].start);
+        let (a, b) = (plan.sample(mid - 1e-3), plan.sample(mid + 1e-3));
+        for (v, (x, y)) in planned_velocity(&plan, mid).iter().zip(a.iter().zip(&b)) {
+            assert!((v - (y - x) / 2e-3).abs() < 1e-3, "{v}");
+        }
+    }
+}
