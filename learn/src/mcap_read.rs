@@ -2,19 +2,21 @@
 //!
 //! mcap's `MessageStream` reads with no bound on a record's length: a record or a chunk's
 //! record that claims petabytes makes it allocate them (the process aborts) or overflow an
-//! addition (it panics) before it finds the bytes are not there. And a record of an
-//! uncompressed chunk that runs past the chunk's end makes it subtract past zero (a panic with
-//! overflow checks, reading on with garbage without). Found by the `demo_mcap` and `ros2_bag`
-//! fuzz targets (`fuzz/`). [`messages`] first checks every uncompressed chunk's records end
-//! where the chunk does, then reads through mcap's streaming reader with every record, chunk
-//! and decompressed chunk bounded by [`record_limit`], so such a file is an error like any
-//! other damage.
+//! addition (it panics) before it finds the bytes are not there. A record of an uncompressed
+//! chunk that runs past the chunk's end makes it subtract past zero (a panic with overflow
+//! checks, reading on with garbage without), and it parses every record, attachments too, whose
+//! parser slices past the end of one too short for its CRC (a panic). Found by the `demo_mcap`
+//! and `ros2_bag` fuzz targets (`fuzz/`). [`messages`] first checks every uncompressed chunk's
+//! records end where the chunk does, then reads through mcap's sans-io reader with every
+//! record, chunk and decompressed chunk bounded by [`record_limit`], and parses only the
+//! schemas, channels and messages it needs: any such file is an error like any other damage.
 
-use std::io::Cursor;
+use std::borrow::Cow;
 
-use mcap::io::MessageReader;
-use mcap::sans_io::LinearReaderOptions;
-use mcap::McapError;
+use mcap::read::ChannelAccumulator;
+use mcap::records::{op, Record};
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::{McapError, McapResult, Message};
 
 /// How many times its file's size a record may hold once decompressed: chunks of recorded
 /// poses and joint states compress a few times, nowhere near this.
@@ -33,15 +35,106 @@ fn record_limit(len: usize) -> usize {
 /// longer than [`record_limit`] is an error. With `to_data_end` the stream ends at the data
 /// end record and a missing end magic is no error (a recording cut short). An uncompressed
 /// chunk whose records run past its end is refused before any message is read.
-pub(crate) fn messages(
-    bytes: &[u8],
-    to_data_end: bool,
-) -> Result<MessageReader<Cursor<&[u8]>>, McapError> {
+pub(crate) fn messages(bytes: &[u8], to_data_end: bool) -> Result<Messages<'_>, McapError> {
     check_chunk_records(bytes)?;
     let options = LinearReaderOptions::default()
         .with_record_length_limit(record_limit(bytes.len()))
         .with_skip_end_magic(to_data_end);
-    Ok(MessageReader::new_with_options(Cursor::new(bytes), options))
+    Ok(Messages {
+        unread: bytes,
+        reader: LinearReader::new_with_options(options),
+        channels: ChannelAccumulator::default(),
+        to_data_end,
+        past_data_end: false,
+        done: false,
+    })
+}
+
+/// The messages of an MCAP file (see [`messages`]), as mcap's `MessageStream` yields them,
+/// nothing after the first error.
+pub(crate) struct Messages<'a> {
+    /// What the reader has not been given yet.
+    unread: &'a [u8],
+    reader: LinearReader,
+    channels: ChannelAccumulator<'static>,
+    /// End at the data end record.
+    to_data_end: bool,
+    /// The data end record has been read: what follows is the summary, skipped.
+    past_data_end: bool,
+    done: bool,
+}
+
+impl Iterator for Messages<'_> {
+    type Item = McapResult<Message<'static>>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let item = self.next_message();
+        if !matches!(item, Some(Ok(_))) {
+            self.done = true;
+        }
+        item
+    }
+}
+
+impl Messages<'_> {
+    fn next_message(&mut self) -> Option<McapResult<Message<'static>>> {
+        while let Some(event) = self.reader.next_event() {
+            let (opcode, data) = match event {
+                Err(e) => return Some(Err(e)),
+                Ok(LinearReadEvent::ReadRequest(need)) => {
+                    let given = need.min(self.unread.len());
+                    let (now, later) = self.unread.split_at(given);
+                    self.reader.insert(given).copy_from_slice(now);
+                    self.reader.notify_read(given);
+                    self.unread = later;
+                    continue;
+                }
+                Ok(LinearReadEvent::Record { opcode, data }) => (opcode, data),
+            };
+            match opcode {
+                op::DATA_END if self.to_data_end => return None,
+                op::DATA_END => self.past_data_end = true,
+                _ if self.past_data_end => {}
+                op::SCHEMA | op::CHANNEL | op::MESSAGE => {
+                    let record = match mcap::parse_record(opcode, data) {
+                        Ok(record) => record,
+                        Err(e) => return Some(Err(e)),
+                    };
+                    let added = match record {
+                        Record::Schema { header, data } => self
+                            .channels
+                            .add_schema(header, Cow::Owned(data.into_owned())),
+                        Record::Channel(channel) => self.channels.add_channel(channel),
+                        Record::Message { header, data } => {
+                            return Some(match self.channels.get(header.channel_id) {
+                                Some(channel) => Ok(Message {
+                                    channel,
+                                    sequence: header.sequence,
+                                    log_time: header.log_time,
+                                    publish_time: header.publish_time,
+                                    data: Cow::Owned(data.into_owned()),
+                                }),
+                                None => Err(McapError::UnknownChannel(
+                                    header.sequence,
+                                    header.channel_id,
+                                )),
+                            })
+                        }
+                        _ => Ok(()),
+                    };
+                    if let Err(e) = added {
+                        return Some(Err(e));
+                    }
+                }
+                // Attachments, metadata, indexes, statistics: never parsed.
+                _ => {}
+            }
+        }
+        None
+    }
 }
 
 /// Checks that no record of an uncompressed chunk runs past the chunk's records (compressed
@@ -221,6 +314,20 @@ mod tests {
         // A chunk the file cuts short is checked as far as it goes.
         assert!(records_fit(&record(3, 3)[..5], 12).is_ok());
         assert!(records_fit(&two[..14], 21).is_ok());
+    }
+
+    #[test]
+    fn an_attachment_too_short_for_its_crc_is_never_parsed() {
+        // Log and create times, an empty name and media type, a data length and no room for
+        // the CRC: mcap's attachment parser sliced past the end (the fuzz targets' fifth).
+        let body = [0u8; 32];
+        let mut file = b"\x89MCAP0\r\n".to_vec();
+        file.push(0x09); // an attachment record's opcode, then its length
+        file.extend_from_slice(&(body.len() as u64).to_le_bytes());
+        file.extend_from_slice(&body);
+        let read: Vec<_> = messages(&file, true).unwrap().collect();
+        assert!(read.iter().all(Result::is_err), "{read:?}");
+        assert!(read.len() <= 1);
     }
 
     #[test]
