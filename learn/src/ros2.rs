@@ -122,6 +122,7 @@ struct Time {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct Header {
     stamp: Time,
+    #[serde(deserialize_with = "cdr_string")]
     frame_id: String,
 }
 
@@ -162,6 +163,7 @@ struct TransformMsg {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct TransformStamped {
     header: Header,
+    #[serde(deserialize_with = "cdr_string")]
     child_frame_id: String,
     transform: TransformMsg,
 }
@@ -176,6 +178,7 @@ struct TfMessage {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct JointState {
     header: Header,
+    #[serde(deserialize_with = "cdr_strings")]
     name: Vec<String>,
     position: Vec<f64>,
     velocity: Vec<f64>,
@@ -353,6 +356,55 @@ pub fn import_ros2(bytes: &[u8], topics: &Ros2Topics) -> Result<Demo, DemoError>
         )));
     }
     Ok(importer.demo)
+}
+
+/// A CDR string (a u32 length counting a closing NUL, then the bytes) read byte by byte: cdr
+/// allocates a string's stated length before reading it, so a corrupt length asked for up to
+/// 4 GiB (found by the `ros2_bag` fuzz target); here memory grows only with the bytes there are.
+struct CdrString(String);
+
+impl<'de> Deserialize<'de> for CdrString {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Bytes;
+        impl<'de> serde::de::Visitor<'de> for Bytes {
+            type Value = CdrString;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a CDR string")
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<CdrString, A::Error> {
+                use serde::de::Error;
+                let short = || A::Error::custom("a string shorter than its length");
+                let length: u32 = seq.next_element()?.ok_or_else(short)?;
+                let mut bytes = Vec::new();
+                for _ in 0..length {
+                    bytes.push(seq.next_element::<u8>()?.ok_or_else(short)?);
+                }
+                bytes.pop(); // the closing NUL
+                String::from_utf8(bytes)
+                    .map(CdrString)
+                    .map_err(A::Error::custom)
+            }
+        }
+        // cdr reads a tuple's elements one after another with nothing in between, each aligned
+        // as on its own: the length as a u32, then the bytes, as its string reader does.
+        deserializer.deserialize_tuple(usize::MAX, Bytes)
+    }
+}
+
+/// A CDR string field (see [`CdrString`]).
+fn cdr_string<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<String, D::Error> {
+    CdrString::deserialize(deserializer).map(|s| s.0)
+}
+
+/// A CDR sequence of strings (see [`CdrString`]).
+fn cdr_strings<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Vec<String>, D::Error> {
+    let strings = Vec::<CdrString>::deserialize(deserializer)?;
+    Ok(strings.into_iter().map(|s| s.0).collect())
 }
 
 fn decode<'de, T: Deserialize<'de>>(data: &'de [u8]) -> Result<T, String> {
@@ -605,6 +657,24 @@ mod tests {
             "{e}"
         );
         assert!(!e.contains("tf:FRAME"), "{e}");
+    }
+
+    #[test]
+    fn a_string_longer_than_its_message_is_an_error_without_its_memory() {
+        // A little-endian CDR header, a stamp, then a frame id claiming 4 GiB and holding 3
+        // bytes: cdr allocated the 4 GiB first (the `ros2_bag` fuzz target's find).
+        let mut data = vec![0, 1, 0, 0];
+        data.extend_from_slice(&[0; 8]);
+        data.extend_from_slice(&u32::MAX.to_le_bytes());
+        data.extend_from_slice(b"abc");
+        let e = decode::<Header>(&data).unwrap_err();
+        assert!(e.contains("not the expected CDR message"), "{e}");
+        let names = JointState {
+            name: vec!["a".into(), String::new(), "finger_joint1".into()],
+            ..joints(0.0, 0.08)
+        };
+        let data = cdr::serialize::<_, _, cdr::CdrLe>(&names, cdr::Infinite).unwrap();
+        assert_eq!(decode::<JointState>(&data).unwrap().name, names.name);
     }
 
     #[test]
