@@ -26,6 +26,7 @@ pub mod options;
 pub mod parry_convert;
 pub mod plan;
 pub mod robot;
+pub mod robot_init;
 pub mod rrt;
 pub mod search;
 pub mod shortcut;

@@ -85,6 +85,15 @@ impl LinkGeometry {
     }
 }
 
+/// Whether loading checks that the simulation can drive the gripper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum GripperCheck {
+    /// Refuse a gripper the simulation cannot drive (every robot that plans).
+    Simulated,
+    /// Take any gripper (a description being inspected).
+    Skipped,
+}
+
 /// Distinct-solution spacing used by [`Robot::ik_solutions`] callers by default (radians).
 pub const SOLUTION_SPACING: f64 = 0.1;
 
@@ -121,6 +130,7 @@ impl Robot {
             Path::new("robots/panda/fer.urdf"),
             &[],
             Some(PANDA_MESHES),
+            GripperCheck::Simulated,
         )
     }
 
@@ -153,7 +163,13 @@ impl Robot {
         let urdf_path = dir.join(&config.urdf);
         let urdf_text = read(&urdf_path)?;
         Robot::build(
-            &toml_text, &toml_path, &urdf_text, &urdf_path, packages, None,
+            &toml_text,
+            &toml_path,
+            &urdf_text,
+            &urdf_path,
+            packages,
+            None,
+            GripperCheck::Simulated,
         )
     }
 
@@ -165,7 +181,35 @@ impl Robot {
         urdf_text: &str,
         urdf_path: &Path,
     ) -> Result<Robot, RobotError> {
-        Robot::build(toml_text, toml_path, urdf_text, urdf_path, &[], None)
+        Robot::build(
+            toml_text,
+            toml_path,
+            urdf_text,
+            urdf_path,
+            &[],
+            None,
+            GripperCheck::Simulated,
+        )
+    }
+
+    /// Builds a robot whose gripper the simulation may be unable to drive, for inspecting a
+    /// description before its folder is written (`akl robot init`); never for planning.
+    pub(crate) fn provisional(
+        toml_text: &str,
+        toml_path: &Path,
+        urdf_text: &str,
+        urdf_path: &Path,
+        packages: &[PackagePath],
+    ) -> Result<Robot, RobotError> {
+        Robot::build(
+            toml_text,
+            toml_path,
+            urdf_text,
+            urdf_path,
+            packages,
+            None,
+            GripperCheck::Skipped,
+        )
     }
 
     fn build(
@@ -175,6 +219,7 @@ impl Robot {
         urdf_path: &Path,
         packages: &[PackagePath],
         embedded: Option<EmbeddedFiles>,
+        gripper: GripperCheck,
     ) -> Result<Robot, RobotError> {
         let config_err = |message: String| RobotError::Config {
             path: toml_path.to_path_buf(),
@@ -261,10 +306,12 @@ impl Robot {
             meshes: geometry.meshes,
         };
         // A gripper the simulation cannot drive is refused now, not when a trial runs.
-        HandModel::build(&robot).map_err(|source| RobotError::Gripper {
-            path: toml_path.to_path_buf(),
-            source,
-        })?;
+        if gripper == GripperCheck::Simulated {
+            HandModel::build(&robot).map_err(|source| RobotError::Gripper {
+                path: toml_path.to_path_buf(),
+                source,
+            })?;
+        }
         Ok(robot)
     }
 
@@ -815,4 +862,4 @@ mod tests {
 
 #[cfg(test)]
 #[path = "robot_quirks.rs"]
-mod quirks;
+pub(crate) mod quirks;

@@ -9,7 +9,7 @@ use crate::fk::CONTINUOUS_RANGE;
 
 /// A six-joint arm: joints 1 and 6 continuous, a root link `world` before `base_link`, fixed
 /// joints with a zero axis, and a two-finger hand whose right finger mimics the left.
-const ARM: &str = r#"<?xml version="1.0"?>
+pub(crate) const ARM: &str = r#"<?xml version="1.0"?>
 <robot name="arm6">
   <link name="world"/>
   <joint name="world_joint" type="fixed"><parent link="world"/><child link="base_link"/>
@@ -50,7 +50,7 @@ const ARM: &str = r#"<?xml version="1.0"?>
 "#;
 
 /// Its `robot.toml`: only the driven finger listed.
-const ARM_TOML: &str = r#"
+pub(crate) const ARM_TOML: &str = r#"
 name = "arm6"
 urdf = "arm6.urdf"
 tcp_link = "tcp"

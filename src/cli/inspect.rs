@@ -34,6 +34,17 @@ pub(crate) enum RobotCommand {
     /// robot's meshes, grown by the robot's margins (or by --margin). Exits with 0 when the
     /// configuration is free, 1 when it is in collision, 2 on bad input.
     Check(RobotCheckArgs),
+    /// Write a robot folder guessed from a stock URDF, and print what was guessed.
+    ///
+    /// Finds the arm (root, joints, flange), the gripper (two prismatic fingers, or a knuckle
+    /// with <mimic> joints), the TCP between the fingertip pads (adding a link to the folder's
+    /// copy of the URDF when none lies there), limits from the URDF, a ready pose pointing
+    /// down in front of the base, and the link pairs never checked (adjacent, and never or
+    /// always meeting over random configurations). Review robot.toml before use (fields:
+    /// robots/README.md). Exits with 2 on a bad URDF, a mesh that cannot be found, an output
+    /// folder that already holds robot.toml, or a written folder that does not load (e.g. a
+    /// gripper the simulation cannot drive: the folder is kept for editing).
+    Init(RobotInitArgs),
     /// Inverse kinematics: the configuration nearest a seed that puts the TCP at a pose.
     ///
     /// The pose is in the robot base frame. Exits with 1 and says "unreachable" if no
@@ -99,6 +110,26 @@ pub(crate) enum SpecCommand {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// `akl robot init`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct RobotInitArgs {
+    /// The URDF (expanded: `xacro robot.urdf.xacro > robot.urdf`).
+    pub urdf: PathBuf,
+    /// Where a ROS package the URDF's `package://` meshes name lies (repeatable); written
+    /// into the folder's `[packages]`.
+    #[arg(long, value_name = "NAME=DIR")]
+    pub package_path: Vec<akl_planner::meshes::PackagePath>,
+    /// The robot folder to write (must not hold a robot.toml yet).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub output: PathBuf,
+    /// Random configurations drawn to find link pairs that never meet.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub samples: usize,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `akl robot check`.

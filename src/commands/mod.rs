@@ -14,6 +14,7 @@ mod relax;
 mod report;
 mod robot;
 mod robot_check;
+mod robot_init;
 mod score;
 mod spec;
 mod task;

@@ -26,6 +26,7 @@ pub(super) fn run(cmd: RobotCommand) -> CliResult {
             json,
         } => ik(&pose, seed_joints.as_deref(), &robot, json),
         RobotCommand::Check(args) => super::robot_check::run(&args),
+        RobotCommand::Init(args) => super::robot_init::run(&args),
     }
 }
 
