@@ -49,6 +49,9 @@ pub enum IkSolverKind {
     Panda,
     /// Damped least squares with joint limits and random restarts; works for any arm.
     Dls,
+    /// Damped least squares and Levenberg–Marquardt racing with random restarts, in the
+    /// manner of TRAC-IK; works for any arm.
+    Trac,
 }
 
 /// The `[gripper]` table: a symmetric parallel gripper.

@@ -7,7 +7,7 @@ use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
 use crate::fk::{ArmJoints, Kinematics, Link, UrdfJoints};
 use crate::geometry::LinkShape;
 use crate::hand::HandModel;
-use crate::ik::{DlsIk, IkSolver, PandaIk};
+use crate::ik::{DlsIk, IkSolver, PandaIk, TracIk};
 use crate::meshes::{read_link_meshes, EmbeddedFiles, LinkMesh, MeshFiles, PackagePath};
 use crate::urdf_load;
 use akl_tsr::Pose;
@@ -288,6 +288,7 @@ impl Robot {
                 dls,
             },
             IkSolverKind::Dls => IkSolver::Dls(dls),
+            IkSolverKind::Trac => IkSolver::Trac(TracIk::new(arm.limits.clone())),
         };
         let robot = Robot {
             source: toml_path

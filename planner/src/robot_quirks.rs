@@ -81,6 +81,11 @@ fn arm(toml: &str, urdf: &str) -> Result<Robot, RobotError> {
     )
 }
 
+/// The six-joint arm, loaded.
+pub(crate) fn arm6() -> Robot {
+    arm(ARM_TOML, ARM).unwrap()
+}
+
 #[test]
 fn a_stock_like_arm_loads() {
     let robot = arm(ARM_TOML, ARM).unwrap();

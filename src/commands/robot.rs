@@ -115,6 +115,9 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         ik_solver: match c.ik.solver {
             akl_planner::config::IkSolverKind::Panda => "panda (analytic, q7 searched)".into(),
             akl_planner::config::IkSolverKind::Dls => "dls (damped least squares, restarts)".into(),
+            akl_planner::config::IkSolverKind::Trac => {
+                "trac (damped least squares and Levenberg-Marquardt racing, restarts)".into()
+            }
         },
         tcp_link: c.tcp_link.clone(),
         flange_link: c.flange_link.clone(),

@@ -1,14 +1,17 @@
-//! Inverse kinematics: the analytic Panda solver and the generic damped least-squares one,
+//! Inverse kinematics: the analytic Panda solver, the generic damped least-squares one and the
+//! racing one (`trac`),
 //! behind one interface that takes TCP poses in the robot base frame.
 
 pub mod analytic;
 pub mod dls;
+pub mod trac;
 
 use crate::error::IkError;
 use crate::fk::Kinematics;
 use akl_tsr::Pose;
 pub use analytic::PandaIk;
 pub use dls::DlsIk;
+pub use trac::TracIk;
 
 /// The solver a robot uses (chosen in `robot.toml`).
 #[derive(Debug, Clone)]
@@ -23,6 +26,8 @@ pub enum IkSolver {
     },
     /// Damped least squares with random restarts.
     Dls(DlsIk),
+    /// Damped least squares and Levenberg–Marquardt racing, with restarts (any arm).
+    Trac(TracIk),
 }
 
 impl IkSolver {
@@ -33,6 +38,7 @@ impl IkSolver {
                 analytic.nearest(kin, tcp, seed).map(|q| q.to_vec())
             }
             IkSolver::Dls(dls) => dls.nearest(kin, tcp, seed),
+            IkSolver::Trac(trac) => trac.nearest(kin, tcp, seed),
         }
         .ok_or(IkError::Unreachable)
     }
@@ -69,6 +75,7 @@ impl IkSolver {
                 all
             }
             IkSolver::Dls(dls) => dls.solutions(kin, tcp, seed, max, spacing),
+            IkSolver::Trac(trac) => trac.solutions(kin, tcp, seed, max, spacing),
         }
     }
 
@@ -92,6 +99,8 @@ impl IkSolver {
                         .map(|q| q.to_vec())
                 }),
             IkSolver::Dls(dls) => dls.continuous(kin, tcp, previous, max_joint_step),
+            // Following a path wants the least-norm step from the previous configuration.
+            IkSolver::Trac(trac) => trac.dls.continuous(kin, tcp, previous, max_joint_step),
         }
     }
 }

@@ -179,7 +179,7 @@ pub fn guess(
             .collect(),
         velocity_limits,
         ik: IkConfig {
-            solver: IkSolverKind::Dls,
+            solver: IkSolverKind::Trac,
         },
         gripper: GripperConfig {
             joints: structure.gripper_joints.clone(),

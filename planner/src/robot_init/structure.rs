@@ -145,10 +145,7 @@ pub fn structure(urdf: &urdf_rs::Robot) -> Result<Structure, String> {
         ));
     }
     // The flange: the link the hand is fixed to, when it is fixed past the last arm joint.
-    let last = path
-        .iter()
-        .rposition(driven)
-        .unwrap_or(path.len() - 1);
+    let last = path.iter().rposition(driven).unwrap_or(path.len() - 1);
     let flange = match (by_child.get(palm.as_str()), gripper) {
         (Some(j), GripperKind::Parallel | GripperKind::Linkage)
             if j.joint_type == JointType::Fixed

@@ -71,7 +71,7 @@ fn a_tcp_link_is_added_between_the_pads_when_the_urdf_has_none() {
         g.tcp
     );
     assert_eq!(g.config.gripper.joints, ["left_joint"]);
-    assert_eq!(g.config.ik.solver, IkSolverKind::Dls);
+    assert_eq!(g.config.ik.solver, IkSolverKind::Trac);
     write(&g, &out).unwrap();
     let robot = Robot::load(&out).unwrap();
     assert_eq!(robot.links()[robot.tcp_link()].name, "akl_tcp");
