@@ -208,3 +208,29 @@ fn a_xacro_file_is_named_with_the_command_that_expands_it() {
         "{e}"
     );
 }
+
+/// No cap on links or collision elements: Franka's primitive model has 23 links and 44
+/// elements; an arm of 60 links with two elements each loads and is checked whole.
+#[test]
+fn many_links_and_collision_elements_load() {
+    let mut chain = String::new();
+    let mut parent = "l1".to_string();
+    for i in 0..54 {
+        let link = format!("x{i}");
+        chain.push_str(&format!(
+            r#"<joint name="fx{i}" type="fixed"><parent link="{parent}"/><child link="{link}"/>
+                <origin xyz="0 0 0.001"/></joint>
+              <link name="{link}"><collision><geometry><sphere radius="0.01"/></geometry></collision>
+                <collision><geometry><cylinder radius="0.005" length="0.01"/></geometry></collision></link>
+            "#
+        ));
+        parent = link;
+    }
+    let urdf = ARM.replace("</robot>", &format!("{chain}</robot>"));
+    let robot = arm(ARM_TOML, &urdf).unwrap();
+    assert!(robot.links().len() > 60);
+    let elements: usize = robot.links().iter().map(|l| l.shapes.len()).sum();
+    assert!(elements > 110, "{elements}");
+    let model = crate::collision::RobotCollision::new(&robot);
+    assert!(model.self_pair_count() > 1000);
+}
