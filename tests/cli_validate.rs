@@ -241,11 +241,7 @@ fn relax_writes_a_gated_wider_spec() {
     assert!(o.status.success(), "{}", stderr(&o));
     let v = json(&o);
     let gates = v["gates"].as_array().unwrap();
-    assert_eq!(
-        gates[0]["keyframe"],
-        serde_json::Value::Null,
-        "the spec first"
-    );
+    assert_eq!(gates[0]["shares"], serde_json::json!([]), "the spec first");
     assert!(
         gates.iter().skip(1).any(|g| g["decision"] == "passes"),
         "{v}"
@@ -277,6 +273,7 @@ fn relax_writes_a_gated_wider_spec() {
     let text = stdout(&o);
     assert!(text.contains("gate on the spec as given"), "{text}");
     assert!(text.contains("keyframe 0 x"), "{text}");
+    assert!(text.contains("gate on the widenings kept"), "{text}");
     assert!(text.contains("TSR volume gained"), "{text}");
 
     // A bad count exits 2 and writes nothing.
@@ -292,6 +289,21 @@ fn relax_writes_a_gated_wider_spec() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--screen"), "{}", stderr(&o));
+    assert!(!dir.join("other.json").exists());
+
+    // So does an effort limit below the spec's own.
+    let o = akl(&[
+        "relax",
+        "tasks/pick_place.truth.json",
+        "--task",
+        "pick_place",
+        "--max-effort",
+        "0.5",
+        "-o",
+        dir.join("other.json").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--max-effort"), "{}", stderr(&o));
     assert!(!dir.join("other.json").exists());
 }
 

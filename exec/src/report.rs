@@ -279,6 +279,9 @@ pub struct TrialReport {
     pub perceived: BTreeMap<String, PoseJson>,
     /// Wall-clock seconds spent planning.
     pub plan_seconds: f64,
+    /// Configurations the planner probed for collisions, over every whole-spec draw, when it
+    /// planned (0 when it did not): planning's work, the same on any machine.
+    pub plan_probes: u64,
     /// Wall-clock seconds spent simulating.
     pub sim_seconds: f64,
     /// Simulated seconds (plan plus settling).
@@ -774,6 +777,7 @@ mod tests {
             placements: BTreeMap::new(),
             perceived: BTreeMap::new(),
             plan_seconds: 0.1,
+            plan_probes: 1000,
             sim_seconds: 0.3,
             simulated_seconds: 10.0,
             keyframes: Vec::new(),

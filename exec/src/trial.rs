@@ -9,7 +9,7 @@ use crate::settle::check_settles;
 use crate::simulate::simulate;
 use crate::timeline::Timeline;
 use crate::world::Physics;
-use akl_planner::{plan_task, PlanError, PlanOptions};
+use akl_planner::{plan_best, PlanError, PlanOptions};
 use akl_scene::{Task, World};
 use akl_tsr::PoseJson;
 use std::collections::BTreeMap;
@@ -66,6 +66,7 @@ pub fn run_trial(
         placements: poses_of(world, watched),
         perceived: poses_of(&perceived, movable),
         plan_seconds: 0.0,
+        plan_probes: 0,
         sim_seconds: 0.0,
         simulated_seconds: 0.0,
         keyframes: Vec::new(),
@@ -83,7 +84,10 @@ pub fn run_trial(
         ..options.plan.clone()
     };
     let started = Instant::now();
-    let planned = plan_task(setup.robot, setup.spec, &perceived, &plan_options);
+    let planned = plan_best(setup.robot, setup.spec, &perceived, &plan_options).map(|best| {
+        report.plan_probes = best.probes;
+        best.plan
+    });
     report.plan_seconds = started.elapsed().as_secs_f64();
     if let Some(tl) = timeline.as_deref_mut() {
         tl.perceived = Some(perceived.clone());

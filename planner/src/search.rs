@@ -30,6 +30,7 @@ use crate::robot::Robot;
 use crate::task::plan_candidate;
 use akl_scene::World;
 use akl_tsr::TaskSpec;
+use std::cell::Cell;
 
 /// What one candidate gave.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,6 +52,10 @@ pub struct BestPlan {
     pub chosen: usize,
     /// Every candidate, in the order planned.
     pub candidates: Vec<CandidateOutcome>,
+    /// Configurations probed for collisions over every candidate: how much checking the plan
+    /// took, the same on any machine (unlike its time), so that a spec whose regions are
+    /// mostly poses the planner must reject shows as costly.
+    pub probes: u64,
 }
 
 impl BestPlan {
@@ -103,6 +108,7 @@ pub fn plan_best(
     let count = options.budget.candidates.max(1);
     let mut best: Option<(usize, Plan)> = None;
     let mut candidates = Vec::with_capacity(count);
+    let probes = Cell::new(0);
     for k in 0..count {
         let mut candidate = options.clone();
         candidate.seed = candidate_seed(options.seed, k);
@@ -111,7 +117,7 @@ pub fn plan_best(
             first if k == 0 => first,
             _ => GoalStrategy::Spread,
         };
-        let result = plan_candidate(robot, spec, world, &candidate);
+        let result = plan_candidate(robot, spec, world, &candidate, &probes);
         candidates.push(CandidateOutcome {
             strategy: candidate.goals.strategy,
             seed: candidate.seed,
@@ -137,6 +143,7 @@ pub fn plan_best(
         plan,
         chosen,
         candidates,
+        probes: probes.get(),
     })
 }
 

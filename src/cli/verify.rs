@@ -134,6 +134,12 @@ pub(crate) struct RelaxArgs {
     /// Most screening trials of one widening.
     #[arg(long, value_name = "N", default_value_t = 20)]
     pub screen: usize,
+    /// Most collision-checking work planning a widened spec's trial may take, as a multiple of
+    /// the spec's own (its mean collision probes per trial over its gate); a widening whose
+    /// screening trials take more on average is rejected: most poses of its regions are ones
+    /// the planner must try and reject.
+    #[arg(long, value_name = "X", default_value_t = 2.0)]
+    pub max_effort: f64,
     #[command(flatten)]
     pub gate: GateArgs,
     /// Seed of the search's first trial; the gates use seeds from SEED + 1,000,000.

@@ -34,17 +34,19 @@ pub(super) fn run(args: RelaxArgs) -> CliResult {
         gate_seed: args.seed.saturating_add(GATE_SEED_OFFSET),
         jobs: jobs(args.run.jobs)?,
         screen: args.screen,
+        max_effort: args.max_effort,
         gate: gate_options(&args.gate, RelaxOptions::default().gate.max_trials)?,
         exec: exec_options(&args.run),
         ..RelaxOptions::default()
     };
     if !args.json {
         println!(
-            "{} on task `{}`: screening up to {} trials per widening (seeds {}..), each keyframe's widening gated on fresh seeds (from {}): success {} at {:.0} % confidence",
+            "{} on task `{}`: screening up to {} trials per widening (seeds {}..), planning at most {}× the spec's collision probes; what screening kept gated on fresh seeds (from {}): success {} at {:.0} % confidence",
             args.spec.display(),
             task.name,
             options.screen,
             options.seed,
+            options.max_effort,
             options.gate_seed,
             options.gate.min_success,
             100.0 * options.gate.confidence
@@ -118,24 +120,39 @@ fn probe_line(p: &Probe) -> String {
         (None, false) => "interrupted".to_string(),
     };
     format!(
-        "  keyframe {} {:<5} [{}, {}] → [{}, {}]: {} trial(s), {verdict}",
+        "  keyframe {} {:<5} [{}, {}] → [{}, {}]: {} trial(s), effort {:.1}×, {verdict}",
         p.keyframe,
         p.axis,
         bound(p.axis, p.from[0]),
         bound(p.axis, p.from[1]),
         bound(p.axis, p.to[0]),
         bound(p.axis, p.to[1]),
-        p.trials
+        p.trials,
+        p.effort
     )
 }
 
 fn gate_line(g: &GateRound) -> String {
-    let what = match g.keyframe {
-        None => "the spec as given".to_string(),
-        Some(k) => format!("keyframe {k} at {:.0} % of its widening", 100.0 * g.kept),
+    let what = if g.shares.is_empty() {
+        "the spec as given".to_string()
+    } else {
+        let widened: Vec<String> = g
+            .shares
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| **s > 0.0)
+            .map(|(k, s)| format!("keyframe {k} at {:.0} %", 100.0 * s))
+            .collect();
+        format!("the widenings kept ({})", widened.join(", "))
+    };
+    let blamed = if g.blamed.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<String> = g.blamed.iter().map(usize::to_string).collect();
+        format!("; blamed on keyframe(s) {}", names.join(", "))
     };
     format!(
-        "gate on {what} (seeds {}..): {} — passed {}{}",
+        "gate on {what} (seeds {}..): {} — passed {}{}{blamed}",
         g.seed,
         g.decision.map_or("interrupted", |d| d.label()),
         g.outcome.pass_rate,

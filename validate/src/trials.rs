@@ -71,6 +71,8 @@ pub struct Outcome {
     pub first_failure: Option<TrialFailure>,
     /// The seeds of the trials that failed, in order.
     pub failed_seeds: Vec<u64>,
+    /// Configurations the planner probed for collisions, over every trial read.
+    pub plan_probes: u64,
 }
 
 impl Default for Outcome {
@@ -82,6 +84,7 @@ impl Default for Outcome {
             failures: BTreeMap::new(),
             first_failure: None,
             failed_seeds: Vec::new(),
+            plan_probes: 0,
         }
     }
 }
@@ -99,9 +102,15 @@ impl Outcome {
             .map(|f| format!("{} (seed {}): {}", f.cause, f.seed, f.detail))
     }
 
+    /// Mean collision probes of planning per trial read (0 when none was).
+    pub fn probes_per_trial(&self) -> f64 {
+        self.plan_probes as f64 / self.run.max(1) as f64
+    }
+
     /// Counts one more trial.
     fn record(&mut self, trial: &TrialReport) {
         self.run += 1;
+        self.plan_probes += trial.plan_probes;
         if trial.passed {
             self.passed += 1;
         } else {

@@ -37,11 +37,10 @@ fn the_relaxed_spec_passed_fresh_seeds_and_only_widens() {
     let relaxed = r.relaxed.clone().expect("a gated relaxation");
     assert!(!r.interrupted);
     // The spec was gated first, and the last gate that passed is the spec returned.
-    assert_eq!(r.gates[0].keyframe, None);
-    assert!(r
-        .gates
-        .iter()
-        .any(|g| g.keyframe.is_some() && g.decision == Some(Decision::Passes)));
+    assert!(r.gates[0].shares.is_empty());
+    let last = r.gates.last().unwrap();
+    assert!(last.shares.iter().any(|s| *s > 0.0));
+    assert_eq!(last.decision, Some(Decision::Passes));
     // Every gate ran on seeds no probe screened on.
     let search_end = options.seed + (options.most_probes(&truth) * options.screen) as u64;
     assert!(r.gates.iter().all(|g| g.seed >= search_end));
@@ -87,4 +86,40 @@ fn a_spec_that_fails_its_own_gate_is_not_relaxed() {
     spec.keyframes[3].tsr.tw_e = pose_from_xyz([0.0, 0.3, 0.0]) * spec.keyframes[3].tsr.tw_e;
     let e = relax(&robot, &task, &spec, &options(), &|_| {}).unwrap_err();
     assert!(matches!(e, ValidateError::SpecFails(_)), "{e}");
+}
+
+#[test]
+fn a_widening_that_multiplies_planning_work_is_rejected_for_it() {
+    let robot = Robot::panda().unwrap();
+    let task = builtin::task("pick_place").unwrap().unwrap();
+    let truth = task.truth.clone().unwrap();
+    // Planning may take no more collision probes than the truth's own: the widest widenings,
+    // whose regions hold poses the planner must try and reject, cannot be kept.
+    let tight = RelaxOptions {
+        max_effort: 1.0,
+        levels: vec![1.0],
+        ..options()
+    };
+    let r = relax(&robot, &task, &truth, &tight, &|_| {}).unwrap();
+    let for_effort: Vec<_> = r
+        .probes
+        .iter()
+        .filter(|p| {
+            p.rejected_by
+                .as_deref()
+                .is_some_and(|why| why.contains("collision probes"))
+        })
+        .collect();
+    assert!(!for_effort.is_empty(), "{:#?}", r.probes);
+    assert!(for_effort.iter().all(|p| p.effort > 1.0), "{for_effort:#?}");
+    assert!(
+        r.probes.iter().filter(|p| p.kept).all(|p| p.effort <= 1.0),
+        "{:#?}",
+        r.probes
+    );
+    let tight_gates = RelaxOptions {
+        max_effort: 0.5,
+        ..options()
+    };
+    assert!(tight_gates.check(&truth).is_err());
 }

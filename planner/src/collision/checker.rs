@@ -14,6 +14,7 @@ use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
 use smallvec::SmallVec;
+use std::cell::Cell;
 use std::collections::VecDeque;
 
 /// Links whose poses a check keeps on the stack; robots with more spill to the heap.
@@ -38,6 +39,8 @@ pub struct Checker<'a> {
     pub(super) robot: &'a Robot,
     pub(super) model: &'a RobotCollision,
     pub(super) scene: &'a Scene,
+    /// Counts every configuration probed, when set ([`Checker::counting`]).
+    probes: Option<&'a Cell<u64>>,
 }
 
 impl<'a> Checker<'a> {
@@ -47,6 +50,16 @@ impl<'a> Checker<'a> {
             robot,
             model,
             scene,
+            probes: None,
+        }
+    }
+
+    /// The same checker, adding one to `probes` for every configuration it probes: a measure
+    /// of a plan's collision-checking work that, unlike its time, is the same on any machine.
+    pub(crate) fn counting(self, probes: &'a Cell<u64>) -> Self {
+        Checker {
+            probes: Some(probes),
+            ..self
         }
     }
 
@@ -195,6 +208,9 @@ impl<'a> Checker<'a> {
         allow: &Allowances,
         sweep: Option<&mut Sweep>,
     ) -> Result<f64, Hit> {
+        if let Some(probes) = self.probes {
+            probes.set(probes.get() + 1);
+        }
         let links = self.robot.links();
         let (poses, placed_bodies) = self.placements(q, width);
         let model = self.model;

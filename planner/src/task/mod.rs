@@ -53,6 +53,7 @@ use akl_tsr::nalgebra::{Translation3, Vector3};
 use akl_tsr::{Constraint, Gripper, Keyframe, Pose, TaskSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use std::cell::Cell;
 use std::time::Instant;
 
 /// The object in the hand.
@@ -112,15 +113,20 @@ struct Planner<'a> {
     pending_line: Option<PlannedLine>,
     /// An object released with no retreat (a line follows): the hand may touch it on that line.
     just_released: Option<String>,
+    /// Configurations probed for collisions so far (the caller's count, see
+    /// [`crate::search::BestPlan::probes`]).
+    probes: &'a Cell<u64>,
 }
 
 /// Plans one candidate: every keyframe in turn, its goals chosen by
-/// `options.goals.strategy`, every random choice drawn from `options.seed`.
+/// `options.goals.strategy`, every random choice drawn from `options.seed`; adds the
+/// configurations it probes for collisions to `probes`.
 pub(crate) fn plan_candidate(
     robot: &Robot,
     spec: &TaskSpec,
     world: &World,
     options: &PlanOptions,
+    probes: &Cell<u64>,
 ) -> Result<Plan, PlanError> {
     let mut planner = Planner {
         robot,
@@ -137,6 +143,7 @@ pub(crate) fn plan_candidate(
         t: 0.0,
         pending_line: None,
         just_released: None,
+        probes,
     };
     spec.validate()
         .and_then(|()| spec.check_references(world.names()))
@@ -253,7 +260,7 @@ impl<'a> Planner<'a> {
             .check_joints(&self.q)
             .map_err(|e| PlanError::Start(e.to_string()))?;
         let scene = self.scene();
-        let checker = Checker::new(self.robot, &self.model, &scene);
+        let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
         match checker.check(&self.q, self.width, None, &Allowances::default()) {
             Some(hit) => Err(PlanError::Start(format!(
                 "the ready configuration collides: {hit}"
