@@ -51,8 +51,8 @@ fn a_revolute_finger_is_refused_when_the_robot_is_loaded() {
     let e = stderr(&out);
     assert!(
         e.contains("robot.toml: [gripper]")
-            && e.contains("`fer_finger_joint1` is not prismatic")
-            && e.contains("linkage"),
+            && e.contains("`fer_leftfinger` turns")
+            && e.contains("parallel linkage"),
         "{e}"
     );
     std::fs::remove_dir_all(dir).unwrap();

@@ -57,8 +57,14 @@ pub enum GripperError {
     #[error("the gripper moves {} joint(s) ({}): the simulation drives exactly two prismatic fingers (list them in [gripper] joints, or one of them when the other mimics it)", .0.len(), .0.join(", "))]
     FingerCount(Vec<String>),
     /// A finger joint turns: a linkage gripper.
-    #[error("gripper joint `{0}` is not prismatic: linkage grippers (revolute knuckles, such as the Robotiq 2F-85's) cannot be simulated yet; the simulation drives two prismatic fingers")]
+    #[error("gripper joint `{0}` is not prismatic: the simulation drives two prismatic fingers, or a linkage (a revolute knuckle listed in [gripper] joints, whose mimic joints move two fingertips)")]
     NotPrismatic(String),
+    /// A linkage's knuckle moves other than two fingertips (leaf links).
+    #[error("the linkage moves {} fingertip link(s) ({}): the simulation drives a linkage whose knuckle moves exactly two", .0.len(), .0.join(", "))]
+    LinkageTips(Vec<String>),
+    /// A revolute gripper turns its fingertip instead of keeping it parallel.
+    #[error("fingertip `{0}` turns as the gripper closes: the simulation drives prismatic fingers or a parallel linkage (fingertips kept parallel, as the Robotiq 2F-85's)")]
+    NotParallel(String),
     /// The two fingers are not both mounted on one link by parallel slides.
     #[error("the two finger joints must slide along one axis on one hand link")]
     TwoHands,

@@ -77,6 +77,10 @@ pub struct Kinematics {
     tcp: usize,
     tcp_path: Vec<usize>,
     arm_links: Vec<usize>,
+    /// For a linkage gripper (a revolute knuckle driving mimic joints): the knuckle angle for
+    /// each pad gap, `[width, angle]` by increasing width. Without it the gripper input is
+    /// the opening itself (prismatic fingers), or the knuckle angle while the map is made.
+    width_map: Option<Vec<[f64; 2]>>,
 }
 
 /// Joint names and limits of the arm, as the compiler found them, and the gripper's joints.
@@ -249,7 +253,19 @@ impl Kinematics {
         if arm.names.is_empty() {
             return Err(UrdfError::NoArmJoint(tcp_link.to_string()));
         }
-        let finger_scale = 1.0 / arm.fingers.len().max(1) as f64;
+        // Prismatic fingers share the opening; a linkage's knuckle takes the input whole
+        // (its angle, mapped from the opening once the pads are known).
+        let knuckle = gripper_joints.iter().any(|g| {
+            nodes.iter().any(|n| {
+                n.joint().name == *g
+                    && matches!(n.joint().joint_type, k::JointType::Rotational { .. })
+            })
+        });
+        let finger_scale = if knuckle {
+            1.0
+        } else {
+            1.0 / arm.fingers.len().max(1) as f64
+        };
         let base_drive = |name: &str, limits: Option<[f64; 2]>| -> Drive {
             if let Some(index) = arm.names.iter().position(|n| n == name) {
                 Drive::Arm {
@@ -336,6 +352,7 @@ impl Kinematics {
                 tcp,
                 tcp_path,
                 arm_links,
+                width_map: None,
             },
             arm,
         ))
@@ -371,7 +388,34 @@ impl Kinematics {
         &self.arm_links
     }
 
-    fn position(drive: Drive, q: &[f64], width: f64) -> f64 {
+    /// Sets the linkage's map from pad gap to knuckle angle (`[width, angle]` pairs by
+    /// increasing width, at least two).
+    pub(crate) fn set_width_map(&mut self, map: Vec<[f64; 2]>) {
+        self.width_map = Some(map);
+    }
+
+    /// The linkage's map from pad gap to knuckle angle, if the gripper is a linkage.
+    pub fn width_map(&self) -> Option<&[[f64; 2]]> {
+        self.width_map.as_deref()
+    }
+
+    /// The gripper input for opening `width`: the width itself, or the linkage's knuckle
+    /// angle interpolated from its map (clamped to the map's ends).
+    fn gripper_input(&self, width: f64) -> f64 {
+        let Some(map) = self.width_map.as_deref() else {
+            return width;
+        };
+        let at = map.partition_point(|[w, _]| *w < width);
+        match (at.checked_sub(1).and_then(|i| map.get(i)), map.get(at)) {
+            (Some([w0, a0]), Some([w1, a1])) if w1 > w0 => {
+                a0 + (a1 - a0) * (width - w0) / (w1 - w0)
+            }
+            (_, Some([_, a])) | (Some([_, a]), None) => *a,
+            (None, None) => width,
+        }
+    }
+
+    fn position(&self, drive: Drive, q: &[f64], width: f64) -> f64 {
         match drive {
             Drive::Constant(c) => c,
             Drive::Arm {
@@ -379,7 +423,7 @@ impl Kinematics {
                 scale,
                 offset,
             } => scale * q[index] + offset,
-            Drive::Width { scale, offset } => scale * width + offset,
+            Drive::Width { scale, offset } => scale * self.gripper_input(width) + offset,
         }
     }
 
@@ -388,11 +432,11 @@ impl Kinematics {
         match link.motion {
             Motion::Fixed => link.origin,
             Motion::Revolute { axis, drive } => {
-                let angle = Self::position(drive, q, width);
+                let angle = self.position(drive, q, width);
                 link.origin * UnitQuaternion::from_axis_angle(&axis, angle)
             }
             Motion::Prismatic { axis, drive } => {
-                let d = Self::position(drive, q, width);
+                let d = self.position(drive, q, width);
                 link.origin * Translation3::from(axis.into_inner() * d)
             }
         }

@@ -20,7 +20,7 @@ use crate::fk::Motion;
 use crate::meshes::MeshRole;
 use crate::parry_convert::{pose, robot_shape};
 use crate::{Geometry, Robot, ShapeRole};
-use akl_tsr::nalgebra::Vector3;
+use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 
 /// An axis-aligned box in some frame: its centre and half extents.
@@ -81,6 +81,103 @@ fn mesh_bounds(robot: &Robot, link: usize) -> Option<(Vector3<f64>, Vector3<f64>
     (lo.x <= hi.x).then_some((lo, hi))
 }
 
+/// How far (radians) a linkage's fingertip may turn over the opening and still count as kept
+/// parallel.
+const PARALLEL_TOLERANCE: f64 = 0.01;
+
+/// A linkage gripper's two fingertips and its knuckle link, when the gripper is one: the
+/// listed gripper joint is revolute, and exactly two leaf links below the knuckle's parent
+/// are moved by gripper joints (the Robotiq 2F-85's fingertips).
+fn linkage_fingers(robot: &Robot) -> Result<Option<(usize, usize, usize)>, GripperError> {
+    let links = robot.links();
+    let listed = &robot.config().gripper.joints;
+    let Some(knuckle) = (0..links.len()).find(|&i| {
+        listed.contains(&links[i].joint) && matches!(links[i].motion, Motion::Revolute { .. })
+    }) else {
+        return Ok(None);
+    };
+    let palm = links[knuckle].parent.ok_or(GripperError::TwoHands)?;
+    let moved = |mut i: usize| loop {
+        if robot.finger_joints().contains(&links[i].joint) {
+            return true;
+        }
+        match links[i].parent {
+            Some(p) if p != palm => i = p,
+            _ => return false,
+        }
+    };
+    let tips: Vec<usize> = (0..links.len())
+        .filter(|&i| !links.iter().any(|l| l.parent == Some(i)) && moved(i))
+        .collect();
+    // Each fingertip carries a pad; other moved leaves (a 2F-85's outer finger links) lie
+    // nearer the palm: the tips are the two leaves farthest from it, fingers open.
+    let poses = robot.link_poses(robot.ready(), robot.open_width());
+    let mut tips: Vec<(f64, usize)> = tips
+        .into_iter()
+        .map(|i| {
+            (
+                (poses[palm].inverse() * poses[i]).translation.vector.norm(),
+                i,
+            )
+        })
+        .collect();
+    tips.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let tips: Vec<usize> = tips.into_iter().map(|(_, i)| i).collect();
+    // The linkage must keep the tips parallel (their pads face each other at every opening).
+    let shut = robot.link_poses(robot.ready(), 0.0);
+    for &tip in tips.iter().take(2) {
+        let turn = |p: &[Pose]| (p[palm].inverse() * p[tip]).rotation;
+        if turn(&poses).angle_to(&turn(&shut)) > PARALLEL_TOLERANCE {
+            return Err(GripperError::NotParallel(links[tip].name.clone()));
+        }
+    }
+    match tips[..] {
+        [a, b, ..] => Ok(Some((a, b, knuckle))),
+        _ => Err(GripperError::LinkageTips(
+            tips.iter().map(|&i| links[i].name.clone()).collect(),
+        )),
+    }
+}
+
+/// For a linkage gripper, the knuckle angle for each gap between the pads' inner faces,
+/// `[gap, angle]` by increasing gap, over the knuckle's range (65 angles); `None` for other
+/// grippers. Measured on `robot` before its map is set (its opening input is the angle).
+pub(crate) fn linkage_width_map(robot: &Robot) -> Option<Vec<[f64; 2]>> {
+    let (_, _, knuckle) = linkage_fingers(robot).ok()??;
+    let hand = HandModel::build(robot).ok()?;
+    let joint = &robot.links()[knuckle].joint;
+    let limit = &robot.urdf().joints.iter().find(|j| j.name == *joint)?.limit;
+    let palm = hand.palm_link;
+    let face = |poses: &[Pose], f: &Finger| {
+        (poses[palm].inverse() * poses[f.link])
+            .transform_point(&Point3::from(f.face_centre()))
+            .coords
+    };
+    // The gap is measured along the line between the faces where they are farthest apart.
+    let apart = |angle: f64| {
+        let poses = robot.link_poses(robot.ready(), angle);
+        face(&poses, &hand.fingers[1]) - face(&poses, &hand.fingers[0])
+    };
+    let (lower, upper) = (apart(limit.lower), apart(limit.upper));
+    let widest = if lower.norm() >= upper.norm() {
+        lower
+    } else {
+        upper
+    };
+    let along = widest.try_normalize(1e-9)?;
+    let mut map: Vec<[f64; 2]> = (0..=64)
+        .map(|k| {
+            let angle = limit.lower + (limit.upper - limit.lower) * f64::from(k) / 64.0;
+            let poses = robot.link_poses(robot.ready(), angle);
+            let gap = (face(&poses, &hand.fingers[1]) - face(&poses, &hand.fingers[0])).dot(&along);
+            [gap.max(0.0), angle]
+        })
+        .collect();
+    map.sort_by(|x, y| x[0].total_cmp(&y[0]));
+    map.dedup_by(|x, y| x[0] <= y[0]);
+    (map.len() >= 2).then_some(map)
+}
+
 /// One finger: its link, its pad in the link frame, and which way its pad faces.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Finger {
@@ -121,25 +218,33 @@ impl HandModel {
     }
 
     /// The hand of `robot`, or why the simulation cannot drive its gripper: it drives two
-    /// prismatic fingers on one link, each with a primitive collision element to grasp with.
+    /// prismatic fingers on one link, each with a primitive collision element to grasp with,
+    /// or a linkage whose knuckle moves two fingertips (pads: their collision meshes' bounds).
     pub fn build(robot: &Robot) -> Result<HandModel, GripperError> {
         let links = robot.links();
-        let finger_links: Vec<usize> = (0..links.len())
-            .filter(|&i| robot.finger_joints().contains(&links[i].joint))
-            .collect();
-        if let Some(&i) = finger_links
-            .iter()
-            .find(|&&i| !matches!(links[i].motion, Motion::Prismatic { .. }))
-        {
-            return Err(GripperError::NotPrismatic(links[i].joint.clone()));
-        }
-        let [a, b] = finger_links[..] else {
-            return Err(GripperError::FingerCount(robot.finger_joints().to_vec()));
+        let linkage = linkage_fingers(robot)?;
+        let (a, b, palm_link) = match linkage {
+            Some((a, b, knuckle)) => (a, b, links[knuckle].parent.ok_or(GripperError::TwoHands)?),
+            None => {
+                let finger_links: Vec<usize> = (0..links.len())
+                    .filter(|&i| robot.finger_joints().contains(&links[i].joint))
+                    .collect();
+                if let Some(&i) = finger_links
+                    .iter()
+                    .find(|&&i| !matches!(links[i].motion, Motion::Prismatic { .. }))
+                {
+                    return Err(GripperError::NotPrismatic(links[i].joint.clone()));
+                }
+                let [a, b] = finger_links[..] else {
+                    return Err(GripperError::FingerCount(robot.finger_joints().to_vec()));
+                };
+                let palm_link = links[a].parent.ok_or(GripperError::TwoHands)?;
+                if links[b].parent != Some(palm_link) {
+                    return Err(GripperError::TwoHands);
+                }
+                (a, b, palm_link)
+            }
         };
-        let palm_link = links[a].parent.ok_or(GripperError::TwoHands)?;
-        if links[b].parent != Some(palm_link) {
-            return Err(GripperError::TwoHands);
-        }
         // The URDF's own primitives: the hulls that enclose meshes reach past the real link.
         let shapes = |i: usize| -> Vec<(Geometry, Pose)> {
             links[i]
@@ -158,8 +263,15 @@ impl HandModel {
             Motion::Prismatic { axis, .. } => Some(links[i].origin.rotation * axis.into_inner()),
             _ => None,
         };
-        let closing = axis(a).ok_or(GripperError::TwoHands)?;
         let (origin_a, origin_b) = (in_palm(a).translation.vector, in_palm(b).translation.vector);
+        // A linkage closes its fingertips along the line between them (the pads stay
+        // parallel as the linkage turns); prismatic fingers along their axis.
+        let closing = match linkage {
+            Some(_) => (origin_b - origin_a)
+                .try_normalize(1e-9)
+                .ok_or(GripperError::TwoHands)?,
+            None => axis(a).ok_or(GripperError::TwoHands)?,
+        };
         let inward = |i: usize, from: &Vector3<f64>, to: &Vector3<f64>| {
             let d = (to - from).dot(&closing).signum() * closing;
             in_palm(i).rotation.inverse() * d
@@ -168,9 +280,10 @@ impl HandModel {
             inward(a, &origin_a, &origin_b),
             inward(b, &origin_b, &origin_a),
         );
-        // The pad: the element whose bounds reach furthest inward.
+        // The pad: the element whose bounds reach furthest inward; for a fingertip with
+        // meshes only (a linkage's), the bounds of its collision meshes.
         let pad = |i: usize, inward: &Vector3<f64>| -> Option<(usize, LocalBox)> {
-            shapes(i)
+            let primitive = shapes(i)
                 .iter()
                 .enumerate()
                 .filter_map(|(k, s)| {
@@ -179,7 +292,22 @@ impl HandModel {
                     Some((k, b, b.centre.dot(inward) + b.half.dot(&inward.abs())))
                 })
                 .max_by(|x, y| x.2.total_cmp(&y.2))
-                .map(|(k, b, _)| (k, b))
+                .map(|(k, b, _)| (k, b));
+            // A fingertip's pad is its distal half: the half of its bounds farther from the
+            // palm along the tip frame's axis that points most away from it.
+            let meshes = || {
+                let (mut lo, mut hi) = mesh_bounds(robot, i)?;
+                let out = in_palm(i).rotation.inverse() * in_palm(i).translation.vector;
+                let k = out.iamax();
+                let middle = 0.5 * (lo[k] + hi[k]);
+                if out[k] > 0.0 {
+                    lo[k] = middle;
+                } else {
+                    hi[k] = middle;
+                }
+                Some((usize::MAX, LocalBox::from_bounds(lo, hi)))
+            };
+            primitive.or_else(|| linkage.and_then(|_| meshes()))
         };
         let no_pad = |i: usize| GripperError::NoPad(links[i].name.clone());
         let (element_a, pad_a) = pad(a, &in_a).ok_or_else(|| no_pad(a))?;
@@ -198,8 +326,11 @@ impl HandModel {
                 inward: in_b,
             },
         ];
-        // The palm ends at the plane of the finger joints.
-        let mount = links[a].origin.translation.vector;
+        // The palm ends at the plane of the finger joints (a linkage's knuckles).
+        let mount = match linkage {
+            Some((_, _, knuckle)) => links[knuckle].origin.translation.vector,
+            None => links[a].origin.translation.vector,
+        };
         let out = mount.iamax();
         let sign = mount[out].signum();
         let palm_bounds = bounds(&shapes(palm_link)).or_else(|| mesh_bounds(robot, palm_link));

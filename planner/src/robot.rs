@@ -290,7 +290,7 @@ impl Robot {
             IkSolverKind::Dls => IkSolver::Dls(dls),
             IkSolverKind::Trac => IkSolver::Trac(TracIk::new(arm.limits.clone())),
         };
-        let robot = Robot {
+        let mut robot = Robot {
             source: toml_path
                 .parent()
                 .map_or_else(String::new, |p| p.display().to_string()),
@@ -306,6 +306,10 @@ impl Robot {
             allowed_pairs,
             meshes: geometry.meshes,
         };
+        // A linkage's opening is mapped to its knuckle angle through the pads' gap.
+        if let Some(map) = crate::hand::linkage_width_map(&robot) {
+            robot.kin.set_width_map(map);
+        }
         // A gripper the simulation cannot drive is refused now, not when a trial runs.
         if gripper == GripperCheck::Simulated {
             HandModel::build(&robot).map_err(|source| RobotError::Gripper {
@@ -449,19 +453,10 @@ impl Robot {
         self.config.gripper.open_width
     }
 
-    /// Position of each finger joint for an opening `width` (clamped to `[0, open_width]`).
-    pub fn finger_positions(&self, width: f64) -> Vec<(String, f64)> {
-        let w = width.clamp(0.0, self.open_width());
-        let n = self.finger_joints().len().max(1) as f64;
-        self.finger_joints()
-            .iter()
-            .map(|j| (j.clone(), w / n))
-            .collect()
-    }
-
-    /// Seconds the gripper takes to go from fully open to closed (or back).
+    /// Seconds the gripper takes to go from fully open to closed (or back): each of the two
+    /// fingers travels half the opening at the finger speed.
     pub fn gripper_travel_time(&self) -> f64 {
-        self.open_width() / self.finger_joints().len().max(1) as f64 / self.config.gripper.speed
+        self.open_width() / 2.0 / self.config.gripper.speed
     }
 
     /// Checks a configuration: right length, finite, within the limits; the error names the

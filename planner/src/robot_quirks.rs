@@ -149,12 +149,12 @@ fn a_gripper_the_simulation_cannot_drive_is_refused_on_load() {
     );
     let e = arm(ARM_TOML, &knuckle).unwrap_err();
     assert!(
-        matches!(&e, RobotError::Gripper { source: GripperError::NotPrismatic(j), .. } if j == "left_joint"),
+        matches!(&e, RobotError::Gripper { source: GripperError::NotParallel(j), .. } if j == "left"),
         "{e}"
     );
     let e = e.to_string();
     assert!(
-        e.contains("arm6/robot.toml") && e.contains("linkage"),
+        e.contains("arm6/robot.toml") && e.contains("parallel linkage"),
         "{e}"
     );
     let none = ARM_TOML.replace(r#"joints = ["left_joint"]"#, "joints = []");
@@ -233,4 +233,64 @@ fn many_links_and_collision_elements_load() {
     assert!(elements > 110, "{elements}");
     let model = crate::collision::RobotCollision::new(&robot);
     assert!(model.self_pair_count() > 1000);
+}
+
+/// A parallel linkage on the six-joint arm: a knuckle turning each finger about y, the
+/// fingertips counter-turned by mimic joints so that they stay parallel (as the 2F-85's).
+fn linkage_arm() -> String {
+    let start = ARM.find(r#"<joint name="left_joint""#).unwrap();
+    let end = ARM.find(r#"<joint name="tcp_joint""#).unwrap();
+    let knuckle = |side: &str, x: f64, sign: f64, mimic: &str| {
+        format!(
+            r#"<joint name="{side}_knuckle" type="revolute"><parent link="hand"/><child link="{side}_k"/>
+                <origin xyz="{x} 0 0.04"/><axis xyz="0 1 0"/>
+                <limit lower="0.1" upper="0.8" effort="1" velocity="1"/>{mimic}</joint>
+              <link name="{side}_k"/>
+              <joint name="{side}_tip_joint" type="revolute"><parent link="{side}_k"/><child link="{side}_tip"/>
+                <origin xyz="0 0 0.04"/><axis xyz="0 1 0"/>
+                <limit lower="-0.8" upper="0.8" effort="1" velocity="1"/>
+                <mimic joint="left_knuckle" multiplier="{}"/></joint>
+              <link name="{side}_tip"><collision><origin xyz="{} 0 0.02"/>
+                <geometry><box size="0.01 0.02 0.04"/></geometry></collision></link>
+            "#,
+            -sign,
+            -0.005 * x.signum()
+        )
+    };
+    let fingers = knuckle("left", 0.005, 1.0, "")
+        + &knuckle(
+            "right",
+            -0.005,
+            -1.0,
+            r#"<mimic joint="left_knuckle" multiplier="-1"/>"#,
+        );
+    format!("{}{fingers}{}", &ARM[..start], &ARM[end..])
+}
+
+#[test]
+fn a_parallel_linkage_is_driven_by_the_gap_between_its_pads() {
+    let toml = ARM_TOML
+        .replace(r#"joints = ["left_joint"]"#, r#"joints = ["left_knuckle"]"#)
+        .replace(
+            r#"hand_links = ["hand", "left", "right"]"#,
+            r#"hand_links = ["hand", "left_tip", "right_tip"]"#,
+        )
+        .replace("open_width = 0.08", "open_width = 0.04");
+    let robot = arm(&toml, &linkage_arm()).unwrap();
+    let hand = HandModel::build(&robot).unwrap();
+    assert!(robot.kinematics().width_map().is_some());
+    let face = |poses: &[Pose], k: usize| {
+        let f = &hand.fingers[k];
+        poses[f.link].transform_point(&akl_tsr::nalgebra::Point3::from(f.face_centre()))
+    };
+    for width in [0.01, 0.025, 0.04] {
+        let poses = robot.link_poses(robot.ready(), width);
+        let gap = (face(&poses, 0) - face(&poses, 1)).norm();
+        assert!((gap - width).abs() < 1e-3, "{width}: {gap}");
+        // The tips keep the palm's orientation (the pads stay parallel).
+        let palm = poses[hand.palm_link].rotation;
+        for f in &hand.fingers {
+            assert!(poses[f.link].rotation.angle_to(&palm) < 1e-9);
+        }
+    }
 }

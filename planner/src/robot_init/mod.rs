@@ -258,7 +258,7 @@ pub fn guess(
     }
     if structure.gripper == GripperKind::Linkage {
         notes.push(format!(
-            "gripper: `{}` drives a linkage ({} joints): the simulation cannot drive it yet, so the folder is refused when loaded",
+            "gripper: `{}` drives a linkage ({} joints): its opening is the gap between the fingertips' pads (the bounds of their collision meshes), mapped to the knuckle angle; check open_width against the gripper's stroke",
             structure.gripper_joints.join(", "),
             structure.finger_joints.len()
         ));

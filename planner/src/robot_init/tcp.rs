@@ -74,15 +74,21 @@ pub(super) fn guess_tcp(robot: &Robot, s: &Structure) -> TcpGuess {
     let poses = robot.link_poses(robot.ready(), robot.open_width());
     let in_palm = |i: usize| poses[palm].inverse() * poses[i];
     let (centre, approach, closing, note) = match (s.gripper, HandModel::build(robot)) {
-        (GripperKind::Parallel, Ok(hand)) => {
+        (GripperKind::Parallel | GripperKind::Linkage, Ok(hand)) => {
             let [a, b] = hand.fingers.map(|f| {
                 in_palm(f.link)
                     .transform_point(&Point3::from(f.face_centre()))
                     .coords
             });
-            let mount = 0.5
-                * (links[hand.fingers[0].link].origin.translation.vector
-                    + links[hand.fingers[1].link].origin.translation.vector);
+            // Prismatic fingers hang from the palm: their joints are the mounts. A linkage's
+            // tips hang from knuckles: the approach is from the palm's origin.
+            let mount = match s.gripper {
+                GripperKind::Parallel => {
+                    0.5 * (links[hand.fingers[0].link].origin.translation.vector
+                        + links[hand.fingers[1].link].origin.translation.vector)
+                }
+                _ => Vector3::zeros(),
+            };
             let centre = 0.5 * (a + b);
             (centre, centre - mount, a - b, None)
         }
