@@ -52,7 +52,7 @@ impl Planner<'_> {
     ) -> Result<Option<Vec<Vec<f64>>>, PlanError> {
         self.lift_resting(i)?;
         let scene = self.scene();
-        let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+        let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
         let free_allow = Step::default().allowances();
         let at_allow = Step::at(event).allowances();
         let at_space = Space {
@@ -205,7 +205,7 @@ impl Planner<'_> {
                 let support = world.support_of(object).map(|s| s.name.clone());
                 world.objects.retain(|x| x.name != *object);
                 let scene = Scene::new(&world, &[]);
-                let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+                let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
                 let allow = Step {
                     resting_on: support.as_deref(),
                     ..Step::default()
@@ -227,7 +227,7 @@ impl Planner<'_> {
                     o.pose = pose * h.held.in_tcp;
                 }
                 let scene = Scene::new(&world, &[]);
-                let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+                let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
                 let allow = Step {
                     released: Some(&h.held.name),
                     ..Step::default()

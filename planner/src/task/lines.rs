@@ -33,7 +33,7 @@ impl Planner<'_> {
         options: &LineOptions,
     ) -> Result<PlannedLine, LineFailure> {
         let scene = self.scene();
-        let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+        let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
         let space = Space {
             checker: &checker,
             width: self.width,
@@ -196,7 +196,7 @@ impl Planner<'_> {
         let without: Vec<String> = holding.iter().map(|h| h.held.name.clone()).collect();
         world.objects.retain(|o| !without.contains(&o.name));
         let scene = Scene::new(&world, &[]);
-        let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+        let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
         let next_closes = next.gripper == Gripper::Closed && holding.is_none();
         let next_opens = next.gripper == Gripper::Open && holding.is_some();
         let beneath = self.beneath(&next.reference);

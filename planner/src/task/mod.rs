@@ -260,7 +260,7 @@ impl<'a> Planner<'a> {
             .check_joints(&self.q)
             .map_err(|e| PlanError::Start(e.to_string()))?;
         let scene = self.scene();
-        let checker = Checker::new(self.robot, &self.model, &scene).counting(&self.probes);
+        let checker = Checker::new(self.robot, &self.model, &scene).counting(self.probes);
         match checker.check(&self.q, self.width, None, &Allowances::default()) {
             Some(hit) => Err(PlanError::Start(format!(
                 "the ready configuration collides: {hit}"
