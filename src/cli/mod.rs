@@ -153,9 +153,12 @@ pub(crate) enum Command {
     /// limit (10 cm, pi/2 for roll and pitch, pi for yaw), a quarter or a sixteenth of it that
     /// passes a screening: up to --screen trials, dropped at the first trial it fails that the
     /// spec before it passes on the same seed (the spec's own rare failures are not blamed on
-    /// the widening). What a keyframe kept is then gated on fresh seeds (from SEED + 1,000,000);
-    /// if the gate does not pass it, the keyframe's widening is halved and gated again, twice
-    /// at most, then dropped. Every probe and gate is printed as it ends. The gain is given as
+    /// the widening), or once its planning takes more than --max-effort times the spec's own
+    /// collision probes. Everything screening kept is then gated at once on fresh seeds (from
+    /// SEED + 1,000,000; at most 299 trials unless --max-trials, so it passes only with no
+    /// failure); each failed trial is replayed with one keyframe's widening undone at a time,
+    /// only the keyframes whose undoing passes it are halved (twice at most, then dropped), and
+    /// the rest is gated again. Every probe and gate is printed as it ends. The gain is given as
     /// TSR log-volume (one bit per doubled width, rotation included) beside the bits of
     /// execution traces (see `akl flexibility`).
     ///

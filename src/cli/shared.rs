@@ -64,7 +64,7 @@ pub(crate) struct GateArgs {
     #[arg(long, value_name = "C", default_value_t = 0.95)]
     pub confidence: f64,
     /// Trials after which the gate stops undecided (default 2,000; for `akl relax`, whose
-    /// undecided widenings are dropped, 1,000).
+    /// gates pass only what has no failure, 299).
     #[arg(long, value_name = "N", alias = "randomize")]
     pub max_trials: Option<usize>,
 }
