@@ -74,7 +74,7 @@ impl DlsIk {
     }
 
     /// A random configuration within the limits.
-    fn random(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    pub(super) fn random(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
         self.limits
             .iter()
             .map(|[lo, hi]| rng.gen_range(*lo..=*hi))
@@ -103,14 +103,27 @@ impl DlsIk {
         max: usize,
         spacing: f64,
     ) -> Vec<Vec<f64>> {
+        self.distinct_solutions(seed, max, spacing, |start, _| self.descend(kin, tcp, start))
+    }
+
+    /// Up to `max` solutions that differ in some joint by more than `spacing`, nearest `seed`
+    /// first: `solve` is given `seed`, then up to [`DlsIk::restarts`] random starts within the
+    /// limits (a fixed RNG seed: deterministic), each with its attempt number.
+    pub(super) fn distinct_solutions(
+        &self,
+        seed: &[f64],
+        max: usize,
+        spacing: f64,
+        mut solve: impl FnMut(&[f64], usize) -> Option<Vec<f64>>,
+    ) -> Vec<Vec<f64>> {
         let mut rng = ChaCha8Rng::seed_from_u64(0x5eed);
         let mut found: Vec<Vec<f64>> = Vec::new();
         let mut start = seed.to_vec();
-        for _ in 0..=self.restarts {
+        for attempt in 0..=self.restarts {
             if found.len() >= max {
                 break;
             }
-            if let Some(q) = self.descend(kin, tcp, &start) {
+            if let Some(q) = solve(&start, attempt) {
                 if found
                     .iter()
                     .all(|f| super::analytic::max_step(f, &q) > spacing)

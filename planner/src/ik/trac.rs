@@ -16,7 +16,7 @@ use super::dls::DlsIk;
 use crate::fk::Kinematics;
 use akl_tsr::nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 use akl_tsr::Pose;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Settings of the racing solver.
@@ -73,13 +73,6 @@ impl TracIk {
         }
     }
 
-    fn random(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
-        self.limits()
-            .iter()
-            .map(|[lo, hi]| rng.gen_range(*lo..=*hi))
-            .collect()
-    }
-
     fn reached(&self, e: &Vector6<f64>) -> bool {
         e.fixed_rows::<3>(0).norm() <= self.dls.position_tolerance
             && e.fixed_rows::<3>(3).norm() <= self.dls.rotation_tolerance
@@ -88,7 +81,7 @@ impl TracIk {
     /// One iteration of `racer` by `method`; `true` once it is at the target.
     fn step(&self, kin: &Kinematics, target: &Pose, r: &mut Racer, method: Method) -> bool {
         if r.steps >= self.iterations_per_start {
-            r.q = self.random(&mut r.rng);
+            r.q = self.dls.random(&mut r.rng);
             r.steps = 0;
             r.mu = 1e-3;
         }
@@ -195,31 +188,15 @@ impl TracIk {
         max: usize,
         spacing: f64,
     ) -> Vec<Vec<f64>> {
-        let mut rng = ChaCha8Rng::seed_from_u64(0x5eed);
-        let mut found: Vec<Vec<f64>> = Vec::new();
-        let mut start = seed.to_vec();
-        for attempt in 0..=self.dls.restarts {
-            if found.len() >= max {
-                break;
-            }
-            // Each attempt is one start for each racer: a few restarts at most.
-            let one = TracIk {
-                iterations: self.iterations_per_start * 2,
-                ..self.clone()
-            };
-            if let Some(q) = one.race(kin, tcp, &start, attempt as u64) {
-                if found
-                    .iter()
-                    .all(|f| super::analytic::max_step(f, &q) > spacing)
-                {
-                    found.push(q);
-                }
-            }
-            start = self.random(&mut rng);
-        }
-        let dist = |q: &Vec<f64>| -> f64 { q.iter().zip(seed).map(|(a, b)| (a - b).powi(2)).sum() };
-        found.sort_by(|a, b| dist(a).total_cmp(&dist(b)));
-        found
+        // Each attempt is one start for each racer: a few restarts at most.
+        let one = TracIk {
+            iterations: self.iterations_per_start * 2,
+            ..self.clone()
+        };
+        self.dls
+            .distinct_solutions(seed, max, spacing, |start, attempt| {
+                one.race(kin, tcp, start, attempt as u64)
+            })
     }
 }
 
