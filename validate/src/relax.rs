@@ -493,8 +493,7 @@ pub fn relax(
     // Collision probes per trial the spec itself takes, the unit of --max-effort.
     let own_effort = own.outcome.probes_per_trial().max(1.0);
     let budget = options.max_effort * own_effort;
-    let mut best = spec.clone();
-    let mut gated_any = false;
+    let mut gated: Option<TaskSpec> = None;
     let mut probes = Vec::new();
     let mut gates = vec![own];
     let searched = if interrupted() {
@@ -551,35 +550,32 @@ pub fn relax(
         }
         let candidate = blend(spec, &screened, &shares);
         let mut round = gate_round(&candidate, &shares)?;
-        match round.decision {
-            Some(Decision::Passes) => {
-                report(Event::Gate(&round));
-                gates.push(round);
-                best = candidate;
-                gated_any = true;
-                break;
-            }
-            None => {
-                report(Event::Gate(&round));
-                gates.push(round);
-                break;
-            }
-            Some(_) => {}
+        let decision = round.decision;
+        if decision.is_some_and(|d| d != Decision::Passes) {
+            round.blamed = blame(
+                spec,
+                &candidate,
+                &shares,
+                &round.outcome.failed_seeds,
+                |s, seed| Ok(!interrupted() && passes_on(s, seed)?),
+            )?;
+            back_off(&mut shares, &mut halvings, &round.blamed, options.back_offs);
         }
-        let blamed = blame(
-            spec,
-            &candidate,
-            &shares,
-            &round.outcome.failed_seeds,
-            |s, seed| Ok(!interrupted() && passes_on(s, seed)?),
-        )?;
-        back_off(&mut shares, &mut halvings, &blamed, options.back_offs);
-        round.blamed = blamed;
         report(Event::Gate(&round));
         gates.push(round);
+        match decision {
+            Some(Decision::Passes) => {
+                gated = Some(candidate);
+                break;
+            }
+            // Interrupted during the gate.
+            None => break,
+            Some(_) => {}
+        }
     }
-    let relaxed = gated_any.then(|| {
-        let mut r = best.clone();
+    let best = gated.as_ref().unwrap_or(spec);
+    let relaxed = gated.as_ref().map(|g| {
+        let mut r = g.clone();
         r.method = format!("{}+relaxed", spec.method);
         r
     });
@@ -591,7 +587,7 @@ pub fn relax(
         .collect();
     Ok(Relaxation {
         bits_before: workspace.bits(spec)?,
-        bits_after: workspace.bits(&best)?,
+        bits_after: workspace.bits(best)?,
         relaxed,
         probes,
         gates,
@@ -606,14 +602,20 @@ mod tests {
     use super::*;
     use akl_scene::builtin;
 
-    #[test]
-    fn a_blend_moves_each_keyframe_its_share_of_the_way() {
+    /// The pick_place truth, and the same with keyframe 1 wider along x and keyframe 3 in yaw.
+    fn truth_and_widened() -> (TaskSpec, TaskSpec) {
         let task = builtin::task("pick_place").unwrap().unwrap();
         let spec = task.truth.clone().unwrap();
         let mut wide = spec.clone();
         wide.keyframes[1].tsr.bw.0[0] = [-0.045, 0.085];
-        wide.keyframes[2].tsr.bw.0[0] = [-0.045, 0.085];
         wide.keyframes[3].tsr.bw.0[5] = [-0.85, 0.85];
+        (spec, wide)
+    }
+
+    #[test]
+    fn a_blend_moves_each_keyframe_its_share_of_the_way() {
+        let (spec, mut wide) = truth_and_widened();
+        wide.keyframes[2].tsr.bw.0[0] = [-0.045, 0.085];
         let blended = blend(&spec, &wide, &[1.0, 0.5, 0.0, 0.25]);
         let [lo, hi] = blended.keyframes[1].tsr.bw.0[0];
         assert!((lo + 0.025).abs() < 1e-12 && (hi - 0.045).abs() < 1e-12);
@@ -627,11 +629,7 @@ mod tests {
 
     #[test]
     fn failures_are_blamed_on_the_widening_whose_undoing_passes_them() {
-        let task = builtin::task("pick_place").unwrap().unwrap();
-        let spec = task.truth.clone().unwrap();
-        let mut wide = spec.clone();
-        wide.keyframes[1].tsr.bw.0[0] = [-0.045, 0.085];
-        wide.keyframes[3].tsr.bw.0[5] = [-0.85, 0.85];
+        let (spec, wide) = truth_and_widened();
         let shares = [0.0, 1.0, 0.0, 1.0];
         // Seed 7 passes once keyframe 3 is narrow again, seed 9 only with both narrow, seed 11
         // fails even as the spec is given (its own failure).
