@@ -347,7 +347,7 @@ impl Calibration {
     /// error names the line and column.
     pub fn from_json(text: &str) -> Result<Calibration, CalibrationError> {
         let calibration: Calibration = serde_json::from_str(text).map_err(|e| {
-            let (line, column, message) = akl_tsr::error::describe_json_error(&e, text);
+            let (line, column, message) = akl_tsr::describe_json_error(&e, text);
             CalibrationError::Invalid(format!("line {line}, column {column}: {message}"))
         })?;
         calibration.validate()?;

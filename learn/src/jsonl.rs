@@ -292,7 +292,7 @@ impl<W: Write> RecordingSink for JsonlDemoWriter<W> {
 
 /// A serde_json message without its position (the caller names the line).
 fn plain(err: &serde_json::Error, text: &str) -> String {
-    akl_tsr::error::describe_json_error(err, text).2
+    akl_tsr::describe_json_error(err, text).2
 }
 
 /// Accumulates frames and events in arrival order, checking each as it comes.

@@ -117,7 +117,7 @@ pub fn read_shapes_file(
         source,
     })?;
     let mut shapes: BTreeMap<String, Shape> = serde_json::from_str(&text).map_err(|e| {
-        let (line, column, message) = akl_tsr::error::describe_json_error(&e, &text);
+        let (line, column, message) = akl_tsr::describe_json_error(&e, &text);
         ShapesFileError::Json {
             path: path.into(),
             line,

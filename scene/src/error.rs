@@ -1,6 +1,6 @@
 //! Typed errors of task files and randomization.
 
-use akl_tsr::error::describe_json_error;
+use akl_tsr::describe_json_error;
 use akl_tsr::{FileError, SpecError};
 
 /// Why a task could not be loaded, validated or randomized.

@@ -141,7 +141,7 @@ fn strip_position(message: &str) -> String {
 }
 
 /// If the text near the error position starts with NaN or an infinity literal, returns it.
-pub fn non_finite_literal_at(text: &str, line: usize, column: usize) -> Option<&'static str> {
+fn non_finite_literal_at(text: &str, line: usize, column: usize) -> Option<&'static str> {
     let row = text.lines().nth(line.checked_sub(1)?)?;
     // serde_json reports the column of the offending character, or one past it.
     let start = column.saturating_sub(1).min(row.len());

@@ -7,20 +7,24 @@
 //!
 //! Math types are nalgebra `f64`, of the version the kinematics crate `k` is built on, so the
 //! whole workspace shares one nalgebra.
+//!
+//! The types are at the crate root; three modules are namespaces of free functions: `pose`
+//! (building and comparing poses, `serde_pose`), `rpy` (roll-pitch-yaw) and `io` (atomic
+//! writes, readable JSON).
 
-pub mod error;
+mod error;
 pub mod io;
-pub mod keyframe;
+mod keyframe;
 pub mod pose;
 pub mod rpy;
-pub mod spec;
+mod spec;
 pub mod tsr;
 
-pub use error::{BoundsError, FileError, PoseError, SpecError};
+pub use error::{describe_json_error, BoundsError, FileError, PoseError, SpecError};
 pub use keyframe::{Constraint, Gripper, Keyframe, KeyframeKind};
 pub use pose::{Pose, PoseJson};
 pub use spec::{TaskSpec, SPEC_VERSION, WORLD_FRAME};
-pub use tsr::{Bounds, Tsr, ROTATION_WEIGHT};
+pub use tsr::{Bounds, Tsr, COORDINATE_NAMES, ROTATION_WEIGHT};
 
 /// The nalgebra version shared with `k`, re-exported so dependants need no direct dependency.
 pub use nalgebra;

@@ -1,7 +1,7 @@
 //! Rigid poses and their JSON form `{"p": [x, y, z], "q": [x, y, z, w]}`.
 
 use crate::error::PoseError;
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// A rigid transform in metres; the pose of a frame expressed in a parent frame.
@@ -90,11 +90,6 @@ pub fn position_distance(a: &Pose, b: &Pose) -> f64 {
 /// Angle of the rotation that takes `a`'s orientation to `b`'s, in radians within [0, π].
 pub fn rotation_distance(a: &Pose, b: &Pose) -> f64 {
     a.rotation.angle_to(&b.rotation)
-}
-
-/// The position of a pose as a vector.
-pub fn position(pose: &Pose) -> Vector3<f64> {
-    pose.translation.vector
 }
 
 #[cfg(test)]

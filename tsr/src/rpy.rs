@@ -26,7 +26,7 @@ pub fn rpy_from_rotation(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
 }
 
 /// Wraps an angle into (-π, π].
-pub fn wrap_angle(a: f64) -> f64 {
+pub(crate) fn wrap_angle(a: f64) -> f64 {
     let w = (a + PI).rem_euclid(2.0 * PI) - PI;
     if w <= -PI {
         w + 2.0 * PI
@@ -37,7 +37,7 @@ pub fn wrap_angle(a: f64) -> f64 {
 
 /// The roll-pitch-yaw triple equivalent to `rpy` across the pitch fold:
 /// (r + π, π − p, y + π) describes the same rotation.
-pub fn folded_rpy(rpy: [f64; 3]) -> [f64; 3] {
+pub(crate) fn folded_rpy(rpy: [f64; 3]) -> [f64; 3] {
     [
         wrap_angle(rpy[0] + PI),
         wrap_angle(PI - rpy[1]),

@@ -22,7 +22,7 @@ pub const ROTATION_WEIGHT: f64 = 0.1;
 /// Slack on every bound when testing membership, absorbing floating-point round-off of
 /// composing and decomposing transforms (poses built from in-bound displacements must test
 /// inside, even on a bound of zero width).
-pub const BOUND_SLACK: f64 = 1e-9;
+pub(crate) const BOUND_SLACK: f64 = 1e-9;
 
 /// Names of the six TSR coordinates, in order.
 pub const COORDINATE_NAMES: [&str; 6] = ["x", "y", "z", "roll", "pitch", "yaw"];
@@ -160,7 +160,7 @@ impl Tsr {
 
 /// Norm of a 6-vector of (position, rotation) differences with rotation weighted by
 /// [`ROTATION_WEIGHT`].
-pub fn weighted_norm(d: &[f64; 6]) -> f64 {
+pub(crate) fn weighted_norm(d: &[f64; 6]) -> f64 {
     let p = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
     let r = d[3] * d[3] + d[4] * d[4] + d[5] * d[5];
     (p + ROTATION_WEIGHT * ROTATION_WEIGHT * r).sqrt()
