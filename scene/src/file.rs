@@ -110,7 +110,7 @@ impl Task {
     }
 
     /// Checks the invariants the JSON shape cannot express; errors name the field. The task
-    /// file's own layout must be one the task can be done in (see [`check_layout`]).
+    /// file's own layout must keep the layout rules every randomized layout is held to.
     pub fn validate(&self) -> Result<(), SceneError> {
         if self.name.trim().is_empty() {
             return Err(SceneError::invalid("name", "is empty"));
@@ -255,7 +255,7 @@ impl Task {
 }
 
 /// Where the ground truth of the task file at `path` lives: `<stem>.truth.json` beside it.
-pub fn truth_path_for(path: &Path) -> PathBuf {
+pub(crate) fn truth_path_for(path: &Path) -> PathBuf {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -8,11 +8,11 @@ use akl_tsr::nalgebra::Vector3;
 
 /// How far (metres) an object's footprint may reach further beyond its support's outline than
 /// it does in the task file (rounding, and the 1 mm contact tolerance of the format).
-pub const OVERHANG_TOLERANCE: f64 = 1e-3;
+pub(crate) const OVERHANG_TOLERANCE: f64 = 1e-3;
 
 /// Why a layout is not one the task can be done in.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum Infeasible {
+pub(crate) enum Infeasible {
     /// Two objects interpenetrate.
     #[error("{a} and {b} interpenetrate by {:.1} mm", depth * 1e3)]
     Overlap {
@@ -91,7 +91,7 @@ pub enum Infeasible {
 /// bounding boxes, [`penetration`]'s negative); every object still rests on what it stood on
 /// in the task file and overhangs it no further than there; every TCP target of the teaching
 /// intent is within [`Reach`].
-pub fn check_layout(task: &Task, world: &World) -> Result<(), Infeasible> {
+pub(crate) fn check_layout(task: &Task, world: &World) -> Result<(), Infeasible> {
     let objects = &world.objects;
     for (i, a) in objects.iter().enumerate() {
         for b in &objects[i + 1..] {

@@ -10,33 +10,36 @@
 //! What a simulation calls: [`randomize`] for a trial's layout, [`ObjectPaths`] to record the
 //! objects' paths while it runs, [`Task::check_goals`] on the settled end world, and
 //! [`Task::fixed_relations`] to know which groundings no layout can tell apart.
+//!
+//! Everything is at the crate root but the built-in tasks, which are looked up by name in
+//! [`builtin`].
 
 pub mod builtin;
-pub mod error;
-pub mod file;
-pub mod goal;
-pub mod intent;
-pub mod layout;
-pub mod motion;
-pub mod overlap;
-pub mod paths;
-pub mod randomize;
-pub mod range;
-pub mod reach;
-pub mod shape;
-pub mod task;
+mod error;
+mod file;
+mod goal;
+mod intent;
+mod layout;
+mod motion;
+mod overlap;
+mod paths;
+mod randomize;
+mod range;
+mod reach;
+mod shape;
+mod task;
 pub mod world;
 
 pub use error::{SceneError, ShapeError};
-pub use file::truth_path_for;
+pub use file::load_obstacles;
 pub use goal::{Goal, GoalCheck};
 pub use intent::{TeachStep, Teaching};
-pub use layout::{check_layout, Infeasible};
 pub use motion::{FixedRelation, Motion, Mover};
+pub use overlap::shapes_overlap;
 pub use paths::{ObjectPaths, PathSample};
-pub use randomize::{randomize, randomize_layout, randomize_layout_with, Layout};
+pub use randomize::{randomize, randomize_layout_with, Layout};
 pub use range::{Groups, Range, Ranges};
 pub use reach::Reach;
 pub use shape::Shape;
 pub use task::{Task, TASK_VERSION};
-pub use world::{Object, World};
+pub use world::{Object, World, SUPPORT_GAP};

@@ -6,7 +6,7 @@ use akl_tsr::Pose;
 
 /// Depth (metres) two objects may sink into each other before they count as overlapping, so
 /// that an object resting on its support (touching, up to rounding) is not an overlap.
-pub const CONTACT_TOLERANCE: f64 = 1e-3;
+pub(crate) const CONTACT_TOLERANCE: f64 = 1e-3;
 
 /// Whether the oriented bounding boxes of two shapes interpenetrate by more than
 /// [`CONTACT_TOLERANCE`].
@@ -24,7 +24,7 @@ pub fn shapes_overlap(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> bool {
 ///
 /// For boxes the positive value is the exact penetration depth (the separating-axis theorem
 /// over face and edge axes).
-pub fn penetration(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> f64 {
+pub(crate) fn penetration(a: &Shape, pa: &Pose, b: &Shape, pb: &Pose) -> f64 {
     let ra = pa.rotation.to_rotation_matrix();
     let rb = pb.rotation.to_rotation_matrix();
     let (ha, hb) = (a.half_extents(), b.half_extents());

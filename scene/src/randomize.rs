@@ -12,19 +12,19 @@ use rand_chacha::ChaCha8Rng;
 /// Layouts drawn from one seed before giving up. The built-in tasks accept well over a third
 /// of their draws (see `tasks/README.md`), so this is only reached when the ranges and rules
 /// leave (almost) no feasible layout.
-pub const MAX_DRAWS: usize = 1000;
+pub(crate) const MAX_DRAWS: usize = 1000;
 
-/// A random layout of `task` and the draws rejected on the way to it.
+/// A random layout of `task`, as [`randomize_layout_with`] returns it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
     /// The task's world with everything moved.
     pub world: World,
     /// Why each earlier draw from the same seed was rejected, in draw order.
-    pub rejected: Vec<Infeasible>,
+    pub(crate) rejected: Vec<Infeasible>,
 }
 
 /// The task's world with its furniture, groups and objects moved at random within their
-/// ranges (see [`Motion::draw`]), in a layout the task can be done in ([`check_layout`]).
+/// ranges (see [`Motion::draw`]), in a layout the task can be done in (its layout rules).
 ///
 /// Deterministic per seed (ChaCha8): a rejected draw is followed by the next draw from the
 /// same generator, so the layout of a seed never depends on other seeds or on threads.
@@ -33,11 +33,11 @@ pub fn randomize(task: &Task, seed: u64) -> Result<World, SceneError> {
 }
 
 /// [`randomize`], also returning why the draws before the accepted one were rejected.
-pub fn randomize_layout(task: &Task, seed: u64) -> Result<Layout, SceneError> {
+pub(crate) fn randomize_layout(task: &Task, seed: u64) -> Result<Layout, SceneError> {
     randomize_layout_with(task, seed, &|_| Ok(()))
 }
 
-/// [`randomize_layout`] with a further test every layout must pass, or be redrawn like an
+/// [`randomize`] with a further test every layout must pass, or be redrawn like an
 /// infeasible one: `accept` says why a layout is refused. The execution engine passes its
 /// check that the layout stands still when simulated untouched, which this crate, knowing no
 /// physics, cannot make.

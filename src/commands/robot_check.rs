@@ -35,7 +35,7 @@ pub(super) fn run(args: &RobotCheckArgs) -> CliResult {
     };
     let world = match (&args.task, &args.obstacles) {
         (Some(task), _) => super::load_task(task)?.world,
-        (None, Some(path)) => akl_scene::file::load_obstacles(path).map_err(CliError::input)?,
+        (None, Some(path)) => akl_scene::load_obstacles(path).map_err(CliError::input)?,
         (None, None) => World {
             robot_base: akl_tsr::Pose::identity(),
             objects: Vec::new(),

@@ -380,7 +380,7 @@ mod tests {
                         let truth = world.support_under(&cube, &resting, "cube");
                         let crowded = world.objects.iter().any(|o| {
                             o.name != support.name
-                                && akl_scene::overlap::shapes_overlap(
+                                && akl_scene::shapes_overlap(
                                     &cube, &resting, &o.shape, &o.pose,
                                 )
                         });
