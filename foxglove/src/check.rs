@@ -26,7 +26,7 @@ fn violation(at: &str, problem: String) -> Violation {
 }
 
 /// Checks `value` against `schema`; `at` names where `value` is, for the report.
-pub fn check(schema: &Value, value: &Value, at: &str) -> Result<(), Violation> {
+pub(crate) fn check(schema: &Value, value: &Value, at: &str) -> Result<(), Violation> {
     let Value::Object(keywords) = schema else {
         return Err(violation(
             at,

@@ -7,7 +7,7 @@ use std::marker::PhantomData;
 use crate::schema::Message;
 
 /// Nanoseconds of `t` seconds, rounded; negative times are 0 (an MCAP log time).
-pub fn nanos(t: f64) -> u64 {
+pub(crate) fn nanos(t: f64) -> u64 {
     (t.max(0.0) * 1e9).round() as u64
 }
 
