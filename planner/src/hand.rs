@@ -18,10 +18,12 @@
 use crate::error::GripperError;
 use crate::fk::Motion;
 use crate::meshes::MeshRole;
-use crate::parry_convert::{pose, robot_shape};
+use crate::parry_convert::{distance, object_shape, pose, robot_shape};
 use crate::{Geometry, Robot, ShapeRole};
+use akl_scene::Shape;
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
+use parry3d::shape::SharedShape;
 
 /// An axis-aligned box in some frame: its centre and half extents.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,6 +83,21 @@ fn mesh_bounds(robot: &Robot, link: usize) -> Option<(Vector3<f64>, Vector3<f64>
     (lo.x <= hi.x).then_some((lo, hi))
 }
 
+/// Whether a gripper joint moves link `i`, which hangs from `palm`: one of the joints from
+/// `palm` down to it is a gripper joint.
+fn moved_below(robot: &Robot, mut i: usize, palm: usize) -> bool {
+    let links = robot.links();
+    loop {
+        if robot.finger_joints().contains(&links[i].joint) {
+            return true;
+        }
+        match links[i].parent {
+            Some(p) if p != palm => i = p,
+            _ => return false,
+        }
+    }
+}
+
 /// How far (radians) a linkage's fingertip may turn over the opening and still count as kept
 /// parallel.
 const PARALLEL_TOLERANCE: f64 = 0.01;
@@ -97,17 +114,8 @@ fn linkage_fingers(robot: &Robot) -> Result<Option<(usize, usize, usize)>, Gripp
         return Ok(None);
     };
     let palm = links[knuckle].parent.ok_or(GripperError::TwoHands)?;
-    let moved = |mut i: usize| loop {
-        if robot.finger_joints().contains(&links[i].joint) {
-            return true;
-        }
-        match links[i].parent {
-            Some(p) if p != palm => i = p,
-            _ => return false,
-        }
-    };
     let tips: Vec<usize> = (0..links.len())
-        .filter(|&i| !links.iter().any(|l| l.parent == Some(i)) && moved(i))
+        .filter(|&i| !links.iter().any(|l| l.parent == Some(i)) && moved_below(robot, i, palm))
         .collect();
     // Each fingertip carries a pad; other moved leaves (a 2F-85's outer finger links) lie
     // nearer the palm: the tips are the two leaves farthest from it, fingers open.
@@ -208,6 +216,10 @@ pub struct HandModel {
     pub palm_link: usize,
     /// The palm, in the hand link's frame.
     pub palm: Option<LocalBox>,
+    /// The links a linkage gripper moves as it closes, but for the two fingertips (the
+    /// 2F-85's knuckles, finger links and inner knuckles); none for prismatic fingers. The
+    /// simulation gives them all their collision shapes: see [`closing_clearance`].
+    pub linkage: Vec<usize>,
 }
 
 impl HandModel {
@@ -342,10 +354,18 @@ impl HandModel {
             }
             (lo[out] < hi[out]).then(|| LocalBox::from_bounds(lo, hi))
         });
+        // The rest of the linkage: links below the palm that a gripper joint moves.
+        let linkage = match linkage {
+            Some(_) => (0..links.len())
+                .filter(|&i| i != a && i != b && moved_below(robot, i, palm_link))
+                .collect(),
+            None => Vec::new(),
+        };
         Ok(HandModel {
             fingers,
             palm_link,
             palm,
+            linkage,
         })
     }
 
@@ -367,6 +387,154 @@ impl HandModel {
             })
             .collect()
     }
+}
+
+/// The furthest (metres) a point of a linkage moves between two consecutive openings at which
+/// its closing is checked ([`HandModel::closing_openings`]).
+pub const SWEEP_STEP: f64 = 0.001;
+
+/// At most this many intervals between the openings at which a closing is checked.
+const MAX_SWEEP_INTERVALS: usize = 1024;
+
+/// How close a linkage comes to an object while the gripper closes on it
+/// ([`closing_clearance`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosingClearance {
+    /// The linkage link that comes closest (robot link index).
+    pub link: usize,
+    /// The least distance between it and the object over the whole closing (metres; 0 or less
+    /// when they meet).
+    pub clearance: f64,
+}
+
+impl HandModel {
+    /// The collision shapes of the linkage ([`HandModel::linkage`]) as (link, geometry, pose
+    /// in the link frame): every shape of those links, as the simulation has them.
+    pub fn linkage_shapes<'r>(&self, robot: &'r Robot) -> Vec<(usize, &'r Geometry, Pose)> {
+        self.linkage
+            .iter()
+            .flat_map(|&i| {
+                robot.links()[i]
+                    .shapes
+                    .iter()
+                    .map(move |s| (i, &s.geometry, s.origin))
+            })
+            .collect()
+    }
+
+    /// The openings, from `from` down to `to`, at which a closing with the arm at `q` is
+    /// checked, and the furthest any point of the linkage moves between two consecutive ones
+    /// (metres): evenly spaced, as many as it takes for that to be at most [`SWEEP_STEP`] (at
+    /// most 1024 intervals). A rigid motion moves no point of a shape further than it moves
+    /// one of the corners of the shape's bounding box, so the corners bound every point.
+    pub fn closing_openings(
+        &self,
+        robot: &Robot,
+        q: &[f64],
+        from: f64,
+        to: f64,
+    ) -> (Vec<f64>, f64) {
+        let corners: Vec<(usize, Point3<f64>)> = self
+            .linkage_shapes(robot)
+            .into_iter()
+            .flat_map(|(link, geometry, origin)| {
+                let (shape, fix) = robot_shape(geometry, 0.0);
+                let aabb = shape.compute_aabb(&pose(&Pose::identity()));
+                let (lo, hi) = (aabb.mins, aabb.maxs);
+                let local = origin * fix;
+                (0..8).map(move |k| {
+                    let pick = |bit: usize, l: f32, h: f32| {
+                        f64::from(if k >> bit & 1 == 0 { l } else { h })
+                    };
+                    let c = Point3::new(
+                        pick(0, lo.x, hi.x),
+                        pick(1, lo.y, hi.y),
+                        pick(2, lo.z, hi.z),
+                    );
+                    (link, local * c)
+                })
+            })
+            .collect();
+        let mut intervals = 8;
+        loop {
+            let openings: Vec<f64> = (0..=intervals)
+                .map(|k| match k {
+                    // Both ends exactly: the last is the grasp itself.
+                    k if k == intervals => to,
+                    k => from + (to - from) * k as f64 / intervals as f64,
+                })
+                .collect();
+            let placed: Vec<Vec<Point3<f64>>> = openings
+                .iter()
+                .map(|&w| {
+                    let poses = robot.link_poses(q, w);
+                    corners.iter().map(|(link, c)| poses[*link] * c).collect()
+                })
+                .collect();
+            let step = placed
+                .windows(2)
+                .flat_map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| (b - a).norm()))
+                .fold(0.0, f64::max);
+            if step <= SWEEP_STEP || intervals >= MAX_SWEEP_INTERVALS {
+                return (openings, step);
+            }
+            intervals *= 2;
+        }
+    }
+}
+
+/// How close the linkage of `hand` comes to `object` at `object_pose` (in the robot's base
+/// frame) while the gripper closes from its full opening down to `width`, the arm standing at
+/// `q`: the least distance found at the openings of [`HandModel::closing_openings`], less half
+/// the furthest a point moves between two of them, so that no opening in between comes closer.
+/// `None` when the gripper has no linkage (prismatic fingers: only their pads move).
+///
+/// The pads close on what they grasp, and the contact rules let the hand touch it; a
+/// linkage's other parts (the 2F-85's inner knuckles swing in above the pads as it closes)
+/// must not press it, which the planner checks with this before it takes a grasp.
+pub fn closing_clearance(
+    robot: &Robot,
+    hand: &HandModel,
+    q: &[f64],
+    width: f64,
+    object: &Shape,
+    object_pose: &Pose,
+) -> Option<ClosingClearance> {
+    let shapes = hand.linkage_shapes(robot);
+    if shapes.is_empty() {
+        return None;
+    }
+    let bodies: Vec<(usize, SharedShape, Pose)> = shapes
+        .into_iter()
+        .map(|(link, geometry, origin)| {
+            let (shape, fix) = robot_shape(geometry, 0.0);
+            (link, shape, origin * fix)
+        })
+        .collect();
+    let (object_shape, fix) = object_shape(object, 0.0);
+    let placed_object = object_pose * fix;
+    let (openings, step) = hand.closing_openings(robot, q, robot.open_width(), width);
+    let mut closest: Option<ClosingClearance> = None;
+    for &w in &openings {
+        let poses = robot.link_poses(q, w);
+        for (link, shape, local) in &bodies {
+            let d = distance(
+                shape,
+                &(poses[*link] * local),
+                &object_shape,
+                &placed_object,
+            )
+            .unwrap_or(0.0)
+                - 0.5 * step;
+            if closest.is_none_or(|c| d < c.clearance) {
+                closest = Some(ClosingClearance {
+                    link: *link,
+                    clearance: d,
+                });
+            }
+        }
+    }
+    closest
 }
 
 #[cfg(test)]

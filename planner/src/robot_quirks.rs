@@ -6,6 +6,8 @@
 use super::*;
 use crate::error::GripperError;
 use crate::fk::CONTINUOUS_RANGE;
+use crate::Geometry;
+use akl_tsr::nalgebra::Point3;
 
 /// A six-joint arm: joints 1 and 6 continuous, a root link `world` before `base_link`, fixed
 /// joints with a zero axis, and a two-finger hand whose right finger mimics the left.
@@ -267,21 +269,153 @@ fn linkage_arm() -> String {
     format!("{}{fingers}{}", &ARM[..start], &ARM[end..])
 }
 
-#[test]
-fn a_parallel_linkage_is_driven_by_the_gap_between_its_pads() {
-    let toml = ARM_TOML
+/// The linkage arm's folder settings: the knuckle listed, the tips as hand links.
+fn linkage_toml() -> String {
+    ARM_TOML
         .replace(r#"joints = ["left_joint"]"#, r#"joints = ["left_knuckle"]"#)
         .replace(
             r#"hand_links = ["hand", "left", "right"]"#,
             r#"hand_links = ["hand", "left_tip", "right_tip"]"#,
         )
-        .replace("open_width = 0.08", "open_width = 0.04");
-    let robot = arm(&toml, &linkage_arm()).unwrap();
+        .replace("open_width = 0.08", "open_width = 0.04")
+}
+
+/// The linkage arm with a bar on each knuckle, as the 2F-85's inner knuckles: links that
+/// the closing swings in above the pads.
+fn linkage_arm_with_bars() -> Robot {
+    let bar = |side: &str| {
+        format!(
+            r#"<link name="{side}_k"><collision><origin xyz="0 0 0.02"/>
+                <geometry><box size="0.006 0.01 0.03"/></geometry></collision></link>"#
+        )
+    };
+    let urdf = linkage_arm()
+        .replace(r#"<link name="left_k"/>"#, &bar("left"))
+        .replace(r#"<link name="right_k"/>"#, &bar("right"));
+    arm(&linkage_toml(), &urdf).unwrap()
+}
+
+/// The closing sweep leaves no opening unchecked: the knuckles are the linkage (not the
+/// tips, which carry the pads), the openings checked run from fully open to the grasp, and at
+/// any opening in between every corner of a knuckle's bar lies within half the sweep's step
+/// of where it is at one of the two openings checked around it.
+#[test]
+fn the_closing_sweep_holds_the_linkage_at_every_opening() {
+    use crate::hand::SWEEP_STEP;
+    use rand::{Rng, SeedableRng};
+    let robot = linkage_arm_with_bars();
+    let hand = HandModel::build(&robot).unwrap();
+    let names: Vec<&str> = hand
+        .linkage
+        .iter()
+        .map(|&i| robot.links()[i].name.as_str())
+        .collect();
+    assert_eq!(names, ["left_k", "right_k"]);
+    let q = robot.ready();
+    let (open, grasp) = (robot.open_width(), 0.01);
+    let (openings, step) = hand.closing_openings(&robot, q, open, grasp);
+    assert!(step > 0.0 && step <= SWEEP_STEP, "{step}");
+    assert_eq!((openings[0], openings[openings.len() - 1]), (open, grasp));
+    assert!(openings.windows(2).all(|w| w[1] < w[0]));
+    let corners: Vec<(usize, Point3<f64>)> = hand
+        .linkage_shapes(&robot)
+        .into_iter()
+        .flat_map(|(link, geometry, origin)| {
+            let Geometry::Box { size } = *geometry else {
+                panic!("{geometry:?}")
+            };
+            (0..8).map(move |k| {
+                let sign = |bit: usize| if k >> bit & 1 == 0 { -0.5 } else { 0.5 };
+                let c = Point3::new(sign(0) * size[0], sign(1) * size[1], sign(2) * size[2]);
+                (link, origin * c)
+            })
+        })
+        .collect();
+    let at = |w: f64| -> Vec<Point3<f64>> {
+        let poses = robot.link_poses(q, w);
+        corners.iter().map(|(link, c)| poses[*link] * c).collect()
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+    let mut moved = 0.0f64;
+    for _ in 0..300 {
+        let w = rng.gen_range(grasp..open);
+        let k = openings.iter().position(|&o| o <= w).unwrap();
+        let (wider, narrower) = (at(openings[k - 1]), at(openings[k]));
+        for ((p, a), b) in at(w).iter().zip(&wider).zip(&narrower) {
+            let nearest = (p - a).norm().min((p - b).norm());
+            assert!(nearest <= 0.5 * step * 1.001, "{w}: {nearest} > {step} / 2");
+            moved = moved.max((p - at(open)[0]).norm());
+        }
+    }
+    // The bars do swing: the check is not vacuous.
+    assert!(moved > 0.01, "{moved}");
+}
+
+/// The clearance the planner reads is the least distance over the whole closing, less at
+/// most half a step: never more than the distance at any opening (measured here at 2,000),
+/// and never below it by more than half a step. An object between the pads reaching up into
+/// the bars' sweep is found pressed; prismatic fingers have no linkage.
+#[test]
+fn the_closing_clearance_is_the_least_over_the_closing() {
+    use crate::hand::closing_clearance;
+    use crate::parry_convert::{distance, object_shape, robot_shape};
+    use akl_scene::Shape;
+    let robot = linkage_arm_with_bars();
+    let hand = HandModel::build(&robot).unwrap();
+    let q = robot.ready();
+    let tcp = robot.tcp_pose(q);
+    let grasp = 0.012;
+    let clearance_to = |height: f64, below: f64| {
+        let shape = Shape::Box {
+            size: [0.01, grasp, height],
+        };
+        // The box between the pads, its top `below` the TCP along the approach.
+        let pose = tcp * Pose::translation(0.0, 0.0, below + 0.5 * height);
+        let c = closing_clearance(&robot, &hand, q, grasp, &shape, &pose).unwrap();
+        let (object, fix) = object_shape(&shape, 0.0);
+        let least = (0..=2000)
+            .map(|k| {
+                let w = robot.open_width() + (grasp - robot.open_width()) * f64::from(k) / 2000.0;
+                let poses = robot.link_poses(q, w);
+                hand.linkage_shapes(&robot)
+                    .into_iter()
+                    .map(|(link, geometry, origin)| {
+                        let (s, f) = robot_shape(geometry, 0.0);
+                        distance(&s, &(poses[link] * origin * f), &object, &(pose * fix)).unwrap()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min);
+        (c.clearance, least)
+    };
+    let (_, step) = hand.closing_openings(&robot, q, robot.open_width(), grasp);
+    let mut found = Vec::new();
+    for below in [-0.08, -0.04, -0.02, 0.0, 0.02] {
+        let (c, least) = clearance_to(0.3, below);
+        assert!(
+            c <= least + 1e-6 && least - c <= 0.5 * step + 1e-4,
+            "{below}: {c} {least}"
+        );
+        found.push(c);
+    }
+    // Reaching up into the hand, the object meets the bars; well below the pads, it does not.
+    assert!(found[0] < 0.0 && found[4] > 0.0, "{found:?}");
+    let panda = Robot::panda().unwrap();
+    let shape = Shape::Sphere { radius: 0.01 };
+    let panda_hand = HandModel::build(&panda).unwrap();
+    assert!(panda_hand.linkage.is_empty());
+    let pose = panda.tcp_pose(panda.ready());
+    assert!(closing_clearance(&panda, &panda_hand, panda.ready(), 0.02, &shape, &pose).is_none());
+}
+
+#[test]
+fn a_parallel_linkage_is_driven_by_the_gap_between_its_pads() {
+    let robot = arm(&linkage_toml(), &linkage_arm()).unwrap();
     let hand = HandModel::build(&robot).unwrap();
     assert!(robot.kinematics().width_map().is_some());
     let face = |poses: &[Pose], k: usize| {
         let f = &hand.fingers[k];
-        poses[f.link].transform_point(&akl_tsr::nalgebra::Point3::from(f.face_centre()))
+        poses[f.link].transform_point(&Point3::from(f.face_centre()))
     };
     for width in [0.01, 0.025, 0.04] {
         let poses = robot.link_poses(robot.ready(), width);

@@ -65,9 +65,10 @@ pub(super) fn opening(urdf: &urdf_rs::Robot, s: &Structure) -> (f64, f64) {
     }
 }
 
-/// The TCP of `robot` (loaded with its palm as TCP): between the fingertip pads, z pointing
-/// from the fingers' mounts towards the pads, y along the closing axis. An existing link fixed
-/// to the palm within 5 mm and 5° of it is taken; otherwise a link `akl_tcp` is added.
+/// The TCP of `robot` (loaded with its palm as TCP): between the fingertip pads half open, z
+/// pointing from the fingers' mounts towards the pads, y along the closing axis. An existing
+/// link fixed to the palm within 5 mm and 5° of it is taken; otherwise a link `akl_tcp` is
+/// added.
 pub(super) fn guess_tcp(robot: &Robot, s: &Structure) -> TcpGuess {
     let links = robot.links();
     let palm = robot.kinematics().link_index(&s.palm).unwrap_or(0);
@@ -75,8 +76,12 @@ pub(super) fn guess_tcp(robot: &Robot, s: &Structure) -> TcpGuess {
     let in_palm = |i: usize| poses[palm].inverse() * poses[i];
     let (centre, approach, closing, note) = match (s.gripper, HandModel::build(robot)) {
         (GripperKind::Parallel | GripperKind::Linkage, Ok(hand)) => {
+            // The pads half open: a linkage's pads travel along the approach as it closes (the
+            // 2F-85's by 13.5 mm), and there they are within half that travel of wherever
+            // they close on something; prismatic fingers' pads stay at one height.
+            let half_open = robot.link_poses(robot.ready(), 0.5 * robot.open_width());
             let [a, b] = hand.fingers.map(|f| {
-                in_palm(f.link)
+                (half_open[palm].inverse() * half_open[f.link])
                     .transform_point(&Point3::from(f.face_centre()))
                     .coords
             });

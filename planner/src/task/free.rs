@@ -78,6 +78,9 @@ impl Planner<'_> {
             if let Some(hit) = at_space.check(q) {
                 return Err(hit.to_string());
             }
+            if let Some(Event::Grasp { object }) = event {
+                this.check_closing(&this.world, object, pose, q)?;
+            }
             let approach = match event {
                 Some(_) => {
                     let pre = backed_off(pose, approach_distance);

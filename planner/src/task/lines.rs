@@ -76,11 +76,22 @@ impl Planner<'_> {
                 let rng = own.as_mut().unwrap_or(&mut self.rng);
                 let targets = crate::goal::tsr_poses(&kf.tsr, goals.poses, goals.strategy, rng);
                 let mut first_failure = None;
+                let mut cannot_close = None;
                 let mut found: Option<(f64, PlannedLine)> = None;
                 let mut planned_lines = 0;
                 for target in &targets {
                     match self.line_to(target, &allow) {
                         Ok(planned) => {
+                            if let (Some(Event::Grasp { object }), Some(end)) =
+                                (event, planned.path.last())
+                            {
+                                if let Err(why) =
+                                    self.check_closing(&self.world, object, target, end)
+                                {
+                                    cannot_close.get_or_insert(why);
+                                    continue;
+                                }
+                            }
                             planned_lines += 1;
                             let time = self.line_time(&planned.path);
                             if found.as_ref().is_none_or(|(best, _)| time < *best) {
@@ -98,10 +109,18 @@ impl Planner<'_> {
                     }
                 }
                 let found = found.map(|(_, planned)| planned);
-                match (found, first_failure) {
-                    (Some(planned), _) => planned,
-                    (None, Some(failure)) => return Err(line_error(i, segment, &failure)),
-                    (None, None) => {
+                match (found, cannot_close, first_failure) {
+                    (Some(planned), _, _) => planned,
+                    // Lines were found, but the gripper could not close at their ends.
+                    (None, Some(reason), _) => {
+                        return Err(PlanError::Line {
+                            keyframe: i,
+                            segment,
+                            reason,
+                        })
+                    }
+                    (None, None, Some(failure)) => return Err(line_error(i, segment, &failure)),
+                    (None, None, None) => {
                         return Err(PlanError::Unreachable {
                             keyframe: i,
                             tried: 0,
@@ -216,9 +235,17 @@ impl Planner<'_> {
             allow: &allow,
         };
         let mut first = None;
+        let mut closing = None;
         for target in crate::goal::tsr_poses(&next.tsr, 4, self.options.goals.strategy, rng) {
             match plan_line(&space, q, pose, &target, &self.base(), &self.options.line) {
                 Ok(path) => {
+                    if let (true, Some(end)) = (next_closes, path.last()) {
+                        if let Err(why) = self.check_closing(&world, &next.reference, &target, end)
+                        {
+                            closing.get_or_insert(why);
+                            continue;
+                        }
+                    }
                     return Ok(PlannedLine {
                         path,
                         poses: LinePoses {
@@ -226,17 +253,18 @@ impl Planner<'_> {
                             to: target,
                         },
                         allow: allow.clone(),
-                    })
+                    });
                 }
                 Err(f) => {
                     first.get_or_insert(f);
                 }
             }
         }
-        Err(first.map_or_else(
-            || "next line: no target".into(),
-            |f| format!("next line: {f}"),
-        ))
+        Err(match (closing, first) {
+            (Some(why), _) => format!("next line: {why}"),
+            (None, Some(f)) => format!("next line: {f}"),
+            (None, None) => "next line: no target".into(),
+        })
     }
 
     /// Checks that the last segment's timed trajectory keeps the TCP within the line

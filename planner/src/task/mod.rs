@@ -43,6 +43,7 @@ use crate::collision::{Checker, Held, RobotCollision, Scene};
 use crate::contact_rules::{Allowances, Step};
 use crate::error::PlanError;
 use crate::goal::GoalStrategy;
+use crate::hand::{closing_clearance, HandModel};
 use crate::line::LineFailure;
 use crate::options::PlanOptions;
 use crate::plan::{GripperEvent, LinePoses, Plan, Segment, PLAN_VERSION};
@@ -116,6 +117,8 @@ struct Planner<'a> {
     /// Configurations probed for collisions so far (the caller's count, see
     /// [`crate::search::BestPlan::probes`]).
     probes: &'a Cell<u64>,
+    /// The hand, whose linkage must keep clear of what the pads close on.
+    hand: Option<HandModel>,
 }
 
 /// Plans one candidate: every keyframe in turn, its goals chosen by
@@ -144,6 +147,7 @@ pub(crate) fn plan_candidate(
         pending_line: None,
         just_released: None,
         probes,
+        hand: HandModel::new(robot),
     };
     spec.validate()
         .and_then(|()| spec.check_references(world.names()))
@@ -244,6 +248,38 @@ impl<'a> Planner<'a> {
 
     fn tcp_world(&self, q: &[f64]) -> Pose {
         self.base() * self.robot.tcp_pose(q)
+    }
+
+    /// Whether the gripper can close on `object` of `world` with the arm at `q` and the TCP at
+    /// `pose`: the parts of a linkage other than its pads keep the held object's margin from
+    /// the object (about to be held: the margin kept between a held object and the arm) at
+    /// every opening of the closing ([`closing_clearance`]). Prismatic fingers always can (only
+    /// their pads move).
+    fn check_closing(
+        &self,
+        world: &World,
+        object: &str,
+        pose: &Pose,
+        q: &[f64],
+    ) -> Result<(), String> {
+        let Some(hand) = &self.hand else {
+            return Ok(());
+        };
+        let o = world
+            .object(object)
+            .ok_or_else(|| format!("no object `{object}`"))?;
+        let width = grasp_width(&o.shape, &o.pose, pose).min(self.robot.open_width());
+        let in_base = self.base().inverse() * o.pose;
+        let margin = self.model.margins().held;
+        match closing_clearance(self.robot, hand, q, width, &o.shape, &in_base) {
+            Some(c) if c.clearance < margin => Err(format!(
+                "closing on {object}: {} comes within {:.1} mm of it (a held object keeps {:.1} mm)",
+                self.robot.links()[c.link].name,
+                c.clearance.max(0.0) * 1e3,
+                margin * 1e3
+            )),
+            _ => Ok(()),
+        }
     }
 
     fn held(&self) -> Option<&Held> {
