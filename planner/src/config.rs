@@ -31,6 +31,29 @@ pub struct RobotConfig {
     /// the robot folder (e.g. `franka_description = "."`).
     #[serde(default)]
     pub packages: std::collections::BTreeMap<String, String>,
+    /// Where the robot stands: the pose of the URDF's root link in the task's robot base
+    /// frame; `None` stands it at the task's robot base.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mount: Option<MountConfig>,
+}
+
+/// The `[mount]` table: a pose as a URDF `<origin>` gives one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MountConfig {
+    /// Position (metres).
+    #[serde(default)]
+    pub xyz: [f64; 3],
+    /// Orientation: roll, pitch, yaw (radians), fixed axes x, y, z.
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl MountConfig {
+    /// The pose of the URDF's root link in the task's robot base frame.
+    pub fn pose(&self) -> akl_tsr::Pose {
+        akl_tsr::pose::pose_from_xyz_rpy(self.xyz, self.rpy)
+    }
 }
 
 /// The `[ik]` table.
@@ -114,6 +137,12 @@ impl RobotConfig {
         }
         if let Some(v) = self.ready.iter().find(|v| !v.is_finite()) {
             return Err(ConfigError::ReadyNotFinite(*v));
+        }
+        if let Some(m) = &self.mount {
+            let values = m.xyz.iter().chain(&m.rpy);
+            if let Some(v) = values.copied().find(|v| !v.is_finite()) {
+                return Err(ConfigError::MountNotFinite(v));
+            }
         }
         positive("gripper.open_width", self.gripper.open_width)?;
         positive("gripper.speed", self.gripper.speed)?;

@@ -165,6 +165,9 @@ pub enum ConfigError {
     /// The ready configuration holds NaN or an infinity.
     #[error("ready holds a non-finite number ({0})")]
     ReadyNotFinite(f64),
+    /// The mount pose holds NaN or an infinity.
+    #[error("mount holds a non-finite number ({0})")]
+    MountNotFinite(f64),
 }
 
 /// Why a joint configuration is not one the arm can take; names the joint.

@@ -388,6 +388,14 @@ impl Kinematics {
         &self.arm_links
     }
 
+    /// Stands the robot at `mount`: the root link's pose in the base frame (every link pose
+    /// and the TCP are then given in the frame the robot stands in).
+    pub(crate) fn set_mount(&mut self, mount: Pose) {
+        if let Some(root) = self.links.first_mut() {
+            root.origin = mount * root.origin;
+        }
+    }
+
     /// Sets the linkage's map from pad gap to knuckle angle (`[width, angle]` pairs by
     /// increasing width, at least two).
     pub(crate) fn set_width_map(&mut self, map: Vec<[f64; 2]>) {

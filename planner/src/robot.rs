@@ -278,6 +278,10 @@ impl Robot {
                     ),
                 })
             })?;
+        // Where the robot stands, before any solver reads the kinematics.
+        if let Some(mount) = &config.mount {
+            kin.set_mount(mount.pose());
+        }
         let dls = DlsIk::new(arm.limits.clone());
         let ik = match config.ik.solver {
             IkSolverKind::Panda => IkSolver::Panda {

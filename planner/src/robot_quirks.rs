@@ -428,3 +428,50 @@ fn a_parallel_linkage_is_driven_by_the_gap_between_its_pads() {
         }
     }
 }
+
+/// A `[mount]` stands the robot elsewhere in the task's robot base frame: every link pose and
+/// the TCP move by the mount pose, inverse kinematics answers targets through it (the numerical
+/// solvers and the analytic Panda solver alike), and a non-finite mount is refused.
+#[test]
+fn a_mount_stands_the_robot_at_its_pose() {
+    use crate::config::MountConfig;
+    let mount = MountConfig {
+        xyz: [0.1, -0.05, 0.2],
+        rpy: [0.0, 0.0, 0.5],
+    };
+    let table = "\n[mount]\nxyz = [0.1, -0.05, 0.2]\nrpy = [0.0, 0.0, 0.5]\n";
+    let cases = [
+        (
+            arm(ARM_TOML, ARM).unwrap(),
+            arm(&format!("{ARM_TOML}{table}"), ARM).unwrap(),
+        ),
+        (
+            Robot::panda().unwrap(),
+            Robot::panda_with(&format!("{}{table}", crate::robot::PANDA_TOML)).unwrap(),
+        ),
+    ];
+    for (standing, mounted) in &cases {
+        assert_eq!(mounted.config().mount, Some(mount));
+        let q = standing.ready();
+        let (a, b) = (standing.link_poses(q, 0.02), mounted.link_poses(q, 0.02));
+        for (p, m) in a.iter().zip(&b) {
+            let moved = mount.pose() * p;
+            assert!((moved.translation.vector - m.translation.vector).norm() < 1e-12);
+            assert!(moved.rotation.angle_to(&m.rotation) < 1e-12);
+        }
+        let target = mounted.tcp_pose(q);
+        assert!(
+            (mount.pose() * standing.tcp_pose(q))
+                .translation
+                .vector
+                .metric_distance(&target.translation.vector)
+                < 1e-12
+        );
+        let solved = mounted.ik(&target, q).unwrap();
+        let reached = mounted.tcp_pose(&solved);
+        assert!((reached.translation.vector - target.translation.vector).norm() < 1e-4);
+    }
+    let bad = format!("{ARM_TOML}\n[mount]\nxyz = [0.1, nan, 0.0]\n");
+    let e = arm(&bad, ARM).unwrap_err().to_string();
+    assert!(e.contains("mount holds a non-finite number"), "{e}");
+}

@@ -199,6 +199,7 @@ pub fn guess(
                 (p.name.clone(), dir.display().to_string())
             })
             .collect(),
+        mount: None,
     };
     let toml_path = out.join("robot.toml");
     let provisional = |config: &RobotConfig, urdf_text: &str| {
