@@ -140,28 +140,36 @@ impl<'a> Batch<'a> {
     /// more trials start: the report then holds the trials that finished (in trial order, each
     /// the same as in an uninterrupted run) and is [`BatchReport::interrupted`] if any trial
     /// did not run.
+    ///
+    /// With one job the trials run on the calling thread, so a batch run from a worker of
+    /// another pool (a search running many one-trial batches) keeps to that pool's threads.
     pub fn run(&self, progress: &(dyn Fn(&TrialReport) + Sync)) -> Result<BatchReport, ExecError> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(self.options.jobs)
-            .build()
-            .map_err(|e| {
-                ExecError::Options(format!("cannot start {} jobs: {e}", self.options.jobs))
-            })?;
         let started = Instant::now();
         let interrupt = self.setup.options.interrupt;
-        let reports: Vec<TrialReport> = pool.install(|| {
-            (0..self.indices.len())
-                .into_par_iter()
-                .filter_map(|k| {
-                    if interrupt.raised() {
-                        return None;
-                    }
-                    let r = self.trial(k, None);
-                    progress(&r);
-                    Some(r)
-                })
-                .collect()
-        });
+        let run_one = |k: usize| {
+            if interrupt.raised() {
+                return None;
+            }
+            let r = self.trial(k, None);
+            progress(&r);
+            Some(r)
+        };
+        let reports: Vec<TrialReport> = if self.options.jobs == 1 {
+            (0..self.indices.len()).map_while(run_one).collect()
+        } else {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(self.options.jobs)
+                .build()
+                .map_err(|e| {
+                    ExecError::Options(format!("cannot start {} jobs: {e}", self.options.jobs))
+                })?;
+            pool.install(|| {
+                (0..self.indices.len())
+                    .into_par_iter()
+                    .filter_map(run_one)
+                    .collect()
+            })
+        };
         let interrupted = reports.len() < self.indices.len();
         let Setup {
             robot,
@@ -257,13 +265,6 @@ pub fn identity(setup: &Setup, trials: usize) -> Identity {
         spec,
         options,
     } = *setup;
-    let mut robot_text = format!("{:?}\n{:?}\n", robot.config(), robot.urdf());
-    for m in robot.meshes() {
-        robot_text.push_str(&format!(
-            "{} {:?} {} {:?} {:?}\n",
-            m.link, m.role, m.uri, m.mesh.vertices, m.mesh.triangles
-        ));
-    }
     // The interrupt flag changes which trials run, never what one gives.
     let settings = ExecOptions {
         interrupt: Interrupt::NEVER,
@@ -274,7 +275,7 @@ pub fn identity(setup: &Setup, trials: usize) -> Identity {
         platform: format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
         spec_hash: spec_hash(spec),
         task_hash: sha256(&format!("{task:?}")),
-        robot_hash: sha256(&robot_text),
+        robot_hash: robot.digest().to_string(),
         settings_hash: sha256(&format!("{settings:?}")),
         trials,
     }

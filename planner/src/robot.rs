@@ -11,6 +11,7 @@ use crate::ik::{DlsIk, IkSolver, PandaIk, TracIk};
 use crate::meshes::{read_link_meshes, EmbeddedFiles, LinkMesh, MeshFiles, PackagePath};
 use crate::urdf_load;
 use akl_tsr::Pose;
+use sha2::{Digest, Sha256};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -113,6 +114,8 @@ pub struct Robot {
     mount_links: Vec<usize>,
     allowed_pairs: Vec<(usize, usize)>,
     meshes: Arc<[LinkMesh]>,
+    /// [`Robot::digest`], computed on first use.
+    digest: OnceLock<String>,
 }
 
 impl Robot {
@@ -309,6 +312,7 @@ impl Robot {
             mount_links,
             allowed_pairs,
             meshes: geometry.meshes,
+            digest: OnceLock::new(),
         };
         // A linkage's opening is mapped to its knuckle angle through the pads' gap.
         if let Some(map) = crate::hand::linkage_width_map(&robot) {
@@ -328,6 +332,34 @@ impl Robot {
     /// gives only primitives).
     pub fn meshes(&self) -> &[LinkMesh] {
         &self.meshes
+    }
+
+    /// SHA-256 (hex) of everything the robot is built from: `robot.toml`, the URDF and every
+    /// mesh. Two runs are comparable only on robots with the same digest. Computed once, as
+    /// the meshes hold tens of thousands of numbers and every batch of trials reports it.
+    pub fn digest(&self) -> &str {
+        self.digest.get_or_init(|| {
+            let mut hasher = Sha256::new();
+            hasher.update(format!("{:?}\n{:?}\n", self.config, self.urdf));
+            for m in self.meshes.iter() {
+                hasher.update(format!("{} {:?} {}\n", m.link, m.role, m.uri));
+                for v in &m.mesh.vertices {
+                    for x in v.coords.iter() {
+                        hasher.update(x.to_le_bytes());
+                    }
+                }
+                for t in &m.mesh.triangles {
+                    for i in t {
+                        hasher.update(i.to_le_bytes());
+                    }
+                }
+            }
+            hasher
+                .finalize()
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect()
+        })
     }
 
     /// The robot's name from `robot.toml`.

@@ -34,9 +34,9 @@
 //! see a wider turn or a millimetre, so the gain is also measured as the log-volume of every
 //! TSR: `Σ log2(new width / old width)` over its six axes, one bit for each doubling.
 
-use crate::trials::{run_gated, run_gated_to_pass, verifying, Outcome};
+use crate::trials::{run_each, run_gated, run_gated_to_pass, verifying, Outcome};
 use crate::ValidateError;
-use akl_exec::batch::{trial_seed, Batch, BatchOptions};
+use akl_exec::batch::trial_seed;
 use akl_exec::ExecOptions;
 use akl_planner::flexibility::{FreedomOptions, Workspace};
 use akl_planner::Robot;
@@ -45,9 +45,10 @@ use akl_stats::{Decision, Gate, GateOptions};
 use akl_tsr::tsr::COORDINATE_NAMES;
 use akl_tsr::{TaskSpec, Tsr};
 use serde::Serialize;
-use std::cell::{Cell, RefCell};
 use std::collections::{BTreeSet, HashMap};
 use std::f64::consts::{FRAC_PI_2, PI};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 /// How a spec is relaxed.
 #[derive(Debug, Clone, PartialEq)]
@@ -290,35 +291,53 @@ fn blend(from: &TaskSpec, to: &TaskSpec, shares: &[f64]) -> TaskSpec {
 }
 
 /// The keyframes of `candidate` (widened from `spec` where `shares` is positive) that the
-/// trials failed on `failed_seeds` are blamed on (`passes` runs a spec's trial on a seed). A
-/// seed the spec as given fails too is the spec's own failure and blames nothing; otherwise
-/// the keyframes whose widening, undone alone, lets the trial pass are blamed, or every widened
-/// keyframe when none does (the widenings fail together).
+/// trials failed on `failed_seeds` are blamed on (`passes` says whether each spec passes its
+/// seed's trial). A seed the spec as given fails too is the spec's own failure and blames
+/// nothing; otherwise the keyframes whose widening, undone alone, lets the trial pass are
+/// blamed, or every widened keyframe when none does (the widenings fail together). The replays
+/// go to `passes` in two rounds, the spec's and then every undoing's, so each round can run in
+/// parallel.
 fn blame(
     spec: &TaskSpec,
     candidate: &TaskSpec,
     shares: &[f64],
     failed_seeds: &[u64],
-    mut passes: impl FnMut(&TaskSpec, u64) -> Result<bool, ValidateError>,
+    passes: impl Fn(&[(TaskSpec, u64)]) -> Result<Vec<bool>, ValidateError>,
 ) -> Result<Vec<usize>, ValidateError> {
     let widened: Vec<usize> = (0..shares.len()).filter(|k| shares[*k] > 0.0).collect();
+    let own = passes(
+        &failed_seeds
+            .iter()
+            .map(|seed| (spec.clone(), *seed))
+            .collect::<Vec<_>>(),
+    )?;
+    let blamable: Vec<u64> = failed_seeds
+        .iter()
+        .zip(own)
+        .filter_map(|(seed, own_passes)| own_passes.then_some(*seed))
+        .collect();
+    let undoings: Vec<(TaskSpec, u64)> = blamable
+        .iter()
+        .flat_map(|seed| {
+            widened.iter().map(move |&k| {
+                let mut undone = candidate.clone();
+                undone.keyframes[k] = spec.keyframes[k].clone();
+                (undone, *seed)
+            })
+        })
+        .collect();
+    let undone_passes = passes(&undoings)?;
     let mut blamed = BTreeSet::new();
-    for &seed in failed_seeds {
-        if !passes(spec, seed)? {
-            continue;
-        }
-        let mut undone_passes = Vec::new();
-        for &k in &widened {
-            let mut undone = candidate.clone();
-            undone.keyframes[k] = spec.keyframes[k].clone();
-            if passes(&undone, seed)? {
-                undone_passes.push(k);
-            }
-        }
-        if undone_passes.is_empty() {
+    for per_seed in undone_passes.chunks(widened.len().max(1)) {
+        let rescued: Vec<usize> = widened
+            .iter()
+            .zip(per_seed)
+            .filter_map(|(k, p)| p.then_some(*k))
+            .collect();
+        if rescued.is_empty() {
             blamed.extend(&widened);
         } else {
-            blamed.extend(undone_passes);
+            blamed.extend(rescued);
         }
     }
     Ok(blamed.into_iter().collect())
@@ -355,35 +374,41 @@ pub fn relax(
     let workspace = Workspace::new(robot, task, &FreedomOptions::default())?;
     let exec = verifying(&options.exec);
     let interrupted = || exec.interrupt.raised();
-    let trials = Cell::new(0usize);
-    // Whether the spec a probe started from passed a seed: run once per (spec, seed).
-    let earlier = RefCell::new(HashMap::<(String, u64), bool>::new());
-    let passes_on = |candidate: &TaskSpec, seed: u64| -> Result<bool, ValidateError> {
-        let key = (candidate.to_json(), seed);
-        if let Some(p) = earlier.borrow().get(&key) {
-            return Ok(*p);
+    let trials = AtomicUsize::new(0);
+    // Whether a spec passed its trial on a seed, each (spec, seed) run once.
+    let earlier = Mutex::new(HashMap::<(String, u64), bool>::new());
+    let known = |spec: &TaskSpec, seed: u64| {
+        let earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
+        earlier.get(&(spec.to_json(), seed)).copied()
+    };
+    // Whether each spec passes its seed's trial, those not yet known run in parallel; a
+    // trial an interrupt kept from running counts as failed (and is not remembered).
+    let replay = |asked: &[(TaskSpec, u64)]| -> Result<Vec<bool>, ValidateError> {
+        let unknown: Vec<(&TaskSpec, u64)> = asked
+            .iter()
+            .filter(|(spec, seed)| known(spec, *seed).is_none())
+            .map(|(spec, seed)| (spec, *seed))
+            .collect();
+        let ran = run_each(robot, task, &exec, &unknown, options.jobs, &|_| false)?;
+        for ((spec, seed), report) in unknown.iter().zip(ran) {
+            if let Some(report) = report {
+                trials.fetch_add(1, Ordering::Relaxed);
+                let mut earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
+                earlier.insert((spec.to_json(), *seed), report.passed);
+            }
         }
-        let batch = Batch::new(
-            robot,
-            task,
-            candidate,
-            &exec,
-            BatchOptions {
-                trials: 1,
-                randomize: true,
-                seed,
-                jobs: 1,
-            },
-        )?;
-        let passed = batch.run(&|_| {})?.passed == 1;
-        trials.set(trials.get() + 1);
-        earlier.borrow_mut().insert(key, passed);
-        Ok(passed)
+        Ok(asked
+            .iter()
+            .map(|(spec, seed)| known(spec, *seed).unwrap_or(false))
+            .collect())
     };
     let mut next_seed = options.seed;
     // Screens `candidate` against `base`, planning at most `budget` collision probes per
     // trial on average: the trials run, the probes planning took, the excess failure or the
-    // excess effort that rejected it, if one did.
+    // excess effort that rejected it, if one did. The trials run `jobs` at a time until one
+    // fails or the probes pass the budget; a failure the base shares is not held against the
+    // candidate, and the trials not yet run are then run. Whether a widening is kept thus
+    // depends only on its seeds, not on which of them ran first.
     let mut screen = |candidate: &TaskSpec,
                       base: &TaskSpec,
                       budget: f64|
@@ -392,41 +417,55 @@ pub fn relax(
         next_seed = next_seed.saturating_add(options.screen as u64);
         let most = budget * options.screen as f64;
         let mut screening = Screening::default();
-        while screening.run < options.screen && !interrupted() {
-            let count = options.jobs.min(options.screen - screening.run);
-            let batch = Batch::new(
-                robot,
-                task,
-                candidate,
-                &exec,
-                BatchOptions {
-                    trials: count,
-                    randomize: true,
-                    seed: trial_seed(first, screening.run),
-                    jobs: count,
-                },
-            )?;
-            let result = batch.run(&|_| {})?;
-            trials.set(trials.get() + result.trials);
-            for t in &result.reports {
-                screening.run += 1;
-                screening.probes += t.plan_probes;
-                if !t.passed && passes_on(base, t.seed)? {
-                    let why = t.root().map_or(String::new(), |f| {
-                        format!("{} (seed {}): {}", f.cause, t.seed, f.detail)
-                    });
-                    screening.rejected_by = Some(why);
-                    return Ok(screening);
-                }
-                // The probes only grow: once past the screening's budget it cannot pass.
-                if screening.probes as f64 > most {
-                    screening.rejected_by = Some(format!(
-                        "planning took {} collision probes in {} trial(s), more than {:.0} × the spec's own allow in {} (--max-effort)",
-                        screening.probes, screening.run, options.max_effort, options.screen
-                    ));
-                    return Ok(screening);
+        let mut pending: Vec<u64> = (0..options.screen).map(|i| trial_seed(first, i)).collect();
+        while !pending.is_empty() && !interrupted() {
+            let asked: Vec<(&TaskSpec, u64)> = pending.iter().map(|s| (candidate, *s)).collect();
+            let spent = AtomicU64::new(screening.probes);
+            let ran = run_each(robot, task, &exec, &asked, options.jobs, &|t| {
+                let probes = spent.fetch_add(t.plan_probes, Ordering::SeqCst) + t.plan_probes;
+                !t.passed || probes as f64 > most
+            })?;
+            let mut failed = Vec::new();
+            let mut left = Vec::new();
+            for (seed, report) in pending.iter().zip(ran) {
+                match report {
+                    Some(t) => {
+                        trials.fetch_add(1, Ordering::Relaxed);
+                        screening.run += 1;
+                        screening.probes += t.plan_probes;
+                        if !t.passed {
+                            failed.push(t);
+                        }
+                    }
+                    None => left.push(*seed),
                 }
             }
+            let base_passes = replay(
+                &failed
+                    .iter()
+                    .map(|t| (base.clone(), t.seed))
+                    .collect::<Vec<_>>(),
+            )?;
+            if let Some(t) = failed
+                .iter()
+                .zip(base_passes)
+                .find_map(|(t, p)| p.then_some(t))
+            {
+                let why = t.root().map_or(String::new(), |f| {
+                    format!("{} (seed {}): {}", f.cause, t.seed, f.detail)
+                });
+                screening.rejected_by = Some(why);
+                return Ok(screening);
+            }
+            // The probes only grow: once past the screening's budget it cannot pass.
+            if screening.probes as f64 > most {
+                screening.rejected_by = Some(format!(
+                    "planning took {} collision probes in {} trial(s), more than {:.0} × the spec's own allow in {} (--max-effort)",
+                    screening.probes, screening.run, options.max_effort, options.screen
+                ));
+                return Ok(screening);
+            }
+            pending = left;
         }
         Ok(screening)
     };
@@ -459,7 +498,7 @@ pub fn relax(
                     options.jobs,
                 )?,
             };
-            trials.set(trials.get() + gated.outcome.run);
+            trials.fetch_add(gated.outcome.run, Ordering::Relaxed);
             Ok(GateRound {
                 shares: shares.to_vec(),
                 blamed: Vec::new(),
@@ -557,7 +596,7 @@ pub fn relax(
                 &candidate,
                 &shares,
                 &round.outcome.failed_seeds,
-                |s, seed| Ok(!interrupted() && passes_on(s, seed)?),
+                replay,
             )?;
             back_off(&mut shares, &mut halvings, &round.blamed, options.back_offs);
         }
@@ -592,7 +631,7 @@ pub fn relax(
         probes,
         gates,
         volume_gain,
-        trials: trials.get(),
+        trials: trials.load(Ordering::Relaxed),
         interrupted: interrupted(),
     })
 }
@@ -601,6 +640,7 @@ pub fn relax(
 mod tests {
     use super::*;
     use akl_scene::builtin;
+    use std::cell::Cell;
 
     /// The pick_place truth, and the same with keyframe 1 wider along x and keyframe 3 in yaw.
     fn truth_and_widened() -> (TaskSpec, TaskSpec) {
@@ -633,32 +673,32 @@ mod tests {
         let shares = [0.0, 1.0, 0.0, 1.0];
         // Seed 7 passes once keyframe 3 is narrow again, seed 9 only with both narrow, seed 11
         // fails even as the spec is given (its own failure).
-        let passes = |s: &TaskSpec, seed: u64| {
+        let passes_one = |s: &TaskSpec, seed: u64| {
             let narrow = |k: usize| s.keyframes[k] == spec.keyframes[k];
-            Ok(match seed {
+            match seed {
                 7 => narrow(3),
                 9 => narrow(1) && narrow(3),
                 _ => false,
-            })
+            }
         };
-        let mut runs = 0;
-        let counted = |s: &TaskSpec, seed: u64| {
-            runs += 1;
-            passes(s, seed)
+        let runs = Cell::new(0);
+        let passes = |asked: &[(TaskSpec, u64)]| {
+            runs.set(runs.get() + asked.len());
+            Ok(asked.iter().map(|(s, seed)| passes_one(s, *seed)).collect())
         };
-        assert_eq!(
-            blame(&spec, &wide, &shares, &[7], counted).unwrap(),
-            vec![3]
-        );
+        assert_eq!(blame(&spec, &wide, &shares, &[7], passes).unwrap(), vec![3]);
         // The spec as given, then one trial per widened keyframe.
-        assert_eq!(runs, 3);
+        assert_eq!(runs.get(), 3);
         assert_eq!(
             blame(&spec, &wide, &shares, &[9], passes).unwrap(),
             vec![1, 3]
         );
+        runs.set(0);
         assert!(blame(&spec, &wide, &shares, &[11], passes)
             .unwrap()
             .is_empty());
+        // The spec's own failure is not replayed with any widening undone.
+        assert_eq!(runs.get(), 1);
         assert_eq!(
             blame(&spec, &wide, &shares, &[11, 7], passes).unwrap(),
             vec![3]

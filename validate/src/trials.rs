@@ -11,8 +11,10 @@ use akl_planner::{PlanBudget, Robot};
 use akl_scene::Task;
 use akl_stats::{Decision, Gate, PassRate};
 use akl_tsr::TaskSpec;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which randomized trials to run: trial i places the objects and plans with seed
 /// `seed + i`, as `akl execute --randomize` does.
@@ -184,6 +186,59 @@ pub fn run_trials(
     let mut outcome = Outcome::default();
     outcome.add(&batch.run(&|_| {})?);
     Ok(outcome)
+}
+
+/// Runs trial `seed` of each `(spec, seed)` of `trials` on its own, `jobs` at a time, in the
+/// order a pool of workers takes them, until `stop` says so of a finished trial; `exec` is used
+/// as given (pass [`verifying`]'s to plan as verification does). A search screening or
+/// replaying single trials of different specs keeps every core busy this way, where batches
+/// of `jobs` trials would wait for their slowest. Returns each trial's report in the order
+/// asked, or `None` for one that had not started when `stop` (or `exec.interrupt`) was raised:
+/// which trials ran may depend on timing, what each gives never does.
+pub fn run_each(
+    robot: &Robot,
+    task: &Task,
+    exec: &ExecOptions,
+    trials: &[(&TaskSpec, u64)],
+    jobs: usize,
+    stop: &(dyn Fn(&TrialReport) -> bool + Sync),
+) -> Result<Vec<Option<TrialReport>>, ExecError> {
+    if jobs == 0 {
+        return Err(ExecError::Options("needs at least one job".into()));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| ExecError::Options(format!("cannot start {jobs} jobs: {e}")))?;
+    let stopped = AtomicBool::new(false);
+    pool.install(|| {
+        trials
+            .par_iter()
+            .with_max_len(1)
+            .map(|&(spec, seed)| {
+                if stopped.load(Ordering::SeqCst) {
+                    return Ok(None);
+                }
+                let batch = Batch::new(
+                    robot,
+                    task,
+                    spec,
+                    exec,
+                    BatchOptions {
+                        trials: 1,
+                        randomize: true,
+                        seed,
+                        jobs: 1,
+                    },
+                )?;
+                let report = batch.run(&|_| {})?.reports.pop();
+                if report.as_ref().is_some_and(stop) {
+                    stopped.store(true, Ordering::SeqCst);
+                }
+                Ok(report)
+            })
+            .collect()
+    })
 }
 
 /// A spec's trials judged by the deployment gate ([`akl_stats::gate`]).
@@ -361,6 +416,48 @@ mod tests {
             assert_eq!((gated.outcome.run, gated.reports.len()), (1, 1));
             assert_eq!(gated.outcome.first_failure, Some(first.clone()));
         }
+    }
+
+    #[test]
+    fn trials_run_each_alone_give_what_a_batch_gives_and_stop_when_asked() {
+        let robot = Robot::panda().unwrap();
+        let task = builtin::task("pick_place").unwrap().unwrap();
+        let truth = task.truth.clone().unwrap();
+        let mut wrong = truth.clone();
+        wrong.keyframes.truncate(1);
+        let exec = verifying(&ExecOptions::default());
+        let asked = [(&truth, 5), (&wrong, 6), (&truth, 6)];
+        let ran = run_each(&robot, &task, &exec, &asked, 2, &|_| false).unwrap();
+        let passed: Vec<bool> = ran.iter().map(|r| r.as_ref().unwrap().passed).collect();
+        assert_eq!(passed, [true, false, true]);
+        let batch = Batch::new(
+            &robot,
+            &task,
+            &truth,
+            &exec,
+            BatchOptions {
+                trials: 2,
+                randomize: true,
+                seed: 5,
+                jobs: 2,
+            },
+        )
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
+        let alone = ran[0].as_ref().unwrap();
+        assert_eq!(
+            (alone.seed, alone.plan_probes),
+            (5, batch.reports[0].plan_probes)
+        );
+        assert_eq!(
+            ran[2].as_ref().unwrap().plan_probes,
+            batch.reports[1].plan_probes
+        );
+        // One job takes the trials in order: a stop after the failure runs nothing after it.
+        let stopped = run_each(&robot, &task, &exec, &asked[1..], 1, &|t| !t.passed).unwrap();
+        assert!(!stopped[0].as_ref().unwrap().passed && stopped[1].is_none());
+        assert!(run_each(&robot, &task, &exec, &asked, 0, &|_| false).is_err());
     }
 
     #[test]
