@@ -336,7 +336,7 @@ impl Driver {
     /// of it catching up with the frames fed; it fails if the recorder exits.
     fn recorded_until(&mut self, path: &Path, seconds: f64) -> usize {
         loop {
-            if let Ok(loaded) = akl_learn::recording::read_demo_file(path) {
+            if let Ok(loaded) = akl_learn::read_demo_file(path) {
                 if loaded.demo.times.last().is_some_and(|t| *t >= seconds) {
                     return loaded.demo.len();
                 }

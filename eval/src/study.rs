@@ -6,12 +6,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use akl_learn::calibration::{Calibration, Motion};
-use akl_learn::demo::{Answer, Demo, DialogueKind};
-use akl_learn::measures::{score, Tolerance};
 use akl_learn::okl::OklParams;
 use akl_learn::teach::{oracle, teach_simulated, Pace, ORACLE_MEMORY};
 use akl_learn::teacher::{calibration_demos, demonstrate, SimulatedDemo, TeacherProfile};
-use akl_learn::{learn_spec, LearnOptions, Method};
+use akl_learn::{learn_spec, score, Answer, Demo, DialogueKind, LearnOptions, Method, Tolerance};
 use akl_scene::Task;
 use akl_tsr::TaskSpec;
 use rayon::prelude::*;
@@ -412,7 +410,7 @@ fn run_trial(
         frames: demo.len(),
         duration_s: demo.times.last().copied().unwrap_or(0.0),
         unintended_line_chance: teacher.unintended_line_chance,
-        unintended_lines: akl_learn::okl::segment::runs(&taught.sim.unintended_line).len(),
+        unintended_lines: akl_learn::okl::runs(&taught.sim.unintended_line).len(),
         queries: dialogue.queries,
         yes: dialogue.yes,
         no: dialogue.no,

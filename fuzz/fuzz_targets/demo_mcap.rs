@@ -5,5 +5,5 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = akl_learn::mcap_io::read_mcap(data);
+    let _ = akl_learn::read_mcap(data);
 });

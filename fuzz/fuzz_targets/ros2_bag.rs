@@ -2,7 +2,7 @@
 //! hand on a PoseStamped topic, one object on the transform tree, the gripper's joint states).
 #![no_main]
 
-use akl_learn::ros2::{import_ros2, PoseSource, Ros2Topics};
+use akl_learn::{import_ros2, PoseSource, Ros2Topics};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

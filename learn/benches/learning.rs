@@ -7,13 +7,11 @@
 #![allow(missing_docs)]
 
 use akl_learn::calibration::Calibration;
-use akl_learn::demo::Answer;
-use akl_learn::detector::Detector;
-use akl_learn::okl::line::{fit_line, fitting_errors};
-use akl_learn::okl::segment::runs;
+use akl_learn::okl::runs;
 use akl_learn::okl::synth::DemoBuilder;
-use akl_learn::tvd;
-use akl_learn::{learn_spec, Demo, LearnOptions, Method};
+use akl_learn::okl::{fit_line, fitting_errors};
+use akl_learn::{learn_spec, Answer, Demo, Detector, LearnOptions, Method};
+
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::Duration;
 
@@ -130,14 +128,14 @@ fn tvd_throughput(c: &mut Criterion) {
         let y = fitting_error_signal(samples);
         group.throughput(Throughput::Elements(y.len() as u64));
         group.bench_with_input(BenchmarkId::new("fitting_error", samples), &y, |b, y| {
-            b.iter(|| tvd::denoise(y, lambda))
+            b.iter(|| akl_learn::okl::denoise(y, lambda))
         });
     }
     for samples in [1_000usize, 2_000, 4_000] {
         let y = worst_case_signal(samples);
         group.throughput(Throughput::Elements(samples as u64));
         group.bench_with_input(BenchmarkId::new("worst_case", samples), &y, |b, y| {
-            b.iter(|| tvd::denoise(y, 0.5))
+            b.iter(|| akl_learn::okl::denoise(y, 0.5))
         });
     }
     group.finish();

@@ -62,7 +62,7 @@ pub const SAMPLING: Sampling = Sampling {
 /// Consecutive confidently straight distance errors needed to switch: 2, one filter step apart.
 /// With 3 the first-time teacher's free reaches drew no query but 10 cm descents were asked
 /// about in only 7 of 10 seeds (the survey of [`SAMPLING`]).
-pub const SWITCH_POINTS: f64 = 2.0;
+pub(crate) const SWITCH_POINTS: f64 = 2.0;
 
 /// Where T_d sits between the mean squared switching probability on unconstrained motion and on
 /// constrained motion: halfway, so that the tank fills only while most errors look straight.
@@ -73,7 +73,7 @@ pub const SWITCH_POINTS: f64 = 2.0;
 /// 130 unintended lines were asked about in each case; with a 0.12 m circle there were 124 to
 /// 300 whatever the fraction. 0.5 is the fraction with a symmetric meaning; at the finer
 /// sampling it leaves no query on the default teacher's curves (the survey of [`SAMPLING`]).
-pub const DISSIPATION_FRACTION: f64 = 0.5;
+pub(crate) const DISSIPATION_FRACTION: f64 = 0.5;
 
 /// How the energy tank's T_d and T_s follow from the fitted model (the thesis infers them from
 /// calibration without saying how; see [`Calibration::fit`]).
@@ -397,7 +397,7 @@ impl Motion {
 }
 
 /// The eq. 3.2 distance errors of a whole motion at `sampling`, as the detector sees them.
-pub fn filtered_errors(motion: &Motion, sampling: Sampling) -> Vec<f64> {
+pub(crate) fn filtered_errors(motion: &Motion, sampling: Sampling) -> Vec<f64> {
     let mut signal = Straightness::new(sampling);
     motion
         .times
@@ -489,9 +489,9 @@ mod tests {
         assert!(circle_errors
             .iter()
             .all(|d| calibration.probability_unconstrained(*d) > 0.5));
-        let (_, on_line) = crate::detector::replay(calibration, &line);
+        let (_, on_line) = crate::detector::Detector::replay(calibration, &line);
         assert_eq!(on_line.len(), 1, "the line switches the detector on once");
-        let (_, on_circle) = crate::detector::replay(calibration, &circle);
+        let (_, on_circle) = crate::detector::Detector::replay(calibration, &circle);
         assert!(on_circle.is_empty(), "the circle never switches it");
     }
 

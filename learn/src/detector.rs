@@ -87,7 +87,7 @@ impl Smoother {
 /// filtered points, streaming. Shared by the detector and its calibration, so both see the
 /// same errors.
 #[derive(Debug, Clone)]
-pub struct Straightness {
+pub(crate) struct Straightness {
     sampling: Sampling,
     smoother: Smoother,
     /// The sample that completed the last filter step (the next step is measured from it).
@@ -103,7 +103,7 @@ pub struct Straightness {
 
 impl Straightness {
     /// An empty signal at `sampling` (its window must not exceed [`Sampling::MAX_WINDOW`]).
-    pub fn new(sampling: Sampling) -> Self {
+    pub(crate) fn new(sampling: Sampling) -> Self {
         Straightness {
             sampling,
             smoother: Smoother::new(sampling.smoothing),
@@ -123,7 +123,7 @@ impl Straightness {
     /// smoothed position is the first filtered point; after it, a step completes at the first
     /// one at least D_F from the one that completed the step before, and the filtered point is
     /// the mean of the step's smoothed positions (up to and including that one).
-    pub fn push(&mut self, t: f64, p: Vector3<f64>) -> Option<f64> {
+    pub(crate) fn push(&mut self, t: f64, p: Vector3<f64>) -> Option<f64> {
         let p = self.smoother.push(t, p);
         if !self.started {
             self.started = true;
@@ -153,7 +153,7 @@ impl Straightness {
     }
 
     /// The filtered point `steps` before the newest one (the oldest kept, if fewer are kept).
-    pub fn back(&self, steps: usize) -> Vector3<f64> {
+    pub(crate) fn back(&self, steps: usize) -> Vector3<f64> {
         let steps = steps.min(self.count.saturating_sub(1)).min(KEPT - 1);
         self.points[(self.count - 1 - steps) % KEPT]
     }
@@ -277,21 +277,21 @@ impl Detector {
     pub fn reset(&mut self) {
         *self = Detector::new(self.calibration);
     }
-}
 
-/// Runs the detector over a whole trajectory (positions and their times): the state after each
-/// position, and the frames where it switched.
-pub fn replay(calibration: Calibration, motion: &Motion) -> (Vec<bool>, Vec<(usize, Switch)>) {
-    let mut detector = Detector::new(calibration);
-    let mut states = Vec::with_capacity(motion.positions.len());
-    let mut switches = Vec::new();
-    for (i, (t, p)) in motion.times.iter().zip(&motion.positions).enumerate() {
-        if let Some(s) = detector.push(*t, *p) {
-            switches.push((i, s));
+    /// Runs the detector over a whole trajectory (positions and their times): the state after each
+    /// position, and the frames where it switched.
+    pub fn replay(calibration: Calibration, motion: &Motion) -> (Vec<bool>, Vec<(usize, Switch)>) {
+        let mut detector = Detector::new(calibration);
+        let mut states = Vec::with_capacity(motion.positions.len());
+        let mut switches = Vec::new();
+        for (i, (t, p)) in motion.times.iter().zip(&motion.positions).enumerate() {
+            if let Some(s) = detector.push(*t, *p) {
+                switches.push((i, s));
+            }
+            states.push(detector.constrained());
         }
-        states.push(detector.constrained());
+        (states, switches)
     }
-    (states, switches)
 }
 
 #[cfg(test)]
@@ -335,13 +335,13 @@ mod tests {
     #[test]
     fn a_straight_line_switches_on_and_a_circle_does_not() {
         let calibration = Calibration::default();
-        let (states, switches) = replay(
+        let (states, switches) = Detector::replay(
             calibration,
             &timed(line(Vector3::zeros(), Vector3::x(), 200)),
         );
         assert_eq!(switches.len(), 1);
         assert!(switches[0].1.constrained && *states.last().unwrap());
-        let (states, switches) = replay(calibration, &timed(arc(0.12, 600)));
+        let (states, switches) = Detector::replay(calibration, &timed(arc(0.12, 600)));
         assert!(switches.is_empty() && !states.iter().any(|s| *s));
     }
 
@@ -353,7 +353,7 @@ mod tests {
         let end = *down.last().unwrap();
         path.extend(&down[1..]);
         path.extend(arc(0.3, 150).into_iter().map(|p| p - arc(0.3, 1)[0] + end));
-        let (_, switches) = replay(Calibration::default(), &timed(path.clone()));
+        let (_, switches) = Detector::replay(Calibration::default(), &timed(path.clone()));
         let on: Vec<_> = switches.iter().filter(|(_, s)| s.constrained).collect();
         assert_eq!(on.len(), 1, "{switches:?}");
         let (frame, switch) = on[0];
@@ -369,7 +369,7 @@ mod tests {
                 .into_iter()
                 .map(|p| p - Vector3::new(0.42, 0.0, 0.0)),
         );
-        let (_, switches) = replay(Calibration::default(), &timed(path));
+        let (_, switches) = Detector::replay(Calibration::default(), &timed(path));
         let flags: Vec<bool> = switches.iter().map(|(_, s)| s.constrained).collect();
         assert_eq!(flags, vec![true, false]);
     }

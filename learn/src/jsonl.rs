@@ -55,7 +55,7 @@ enum EventName {
 
 /// One line of a JSONL demonstration after the header, parsed and checked on its own.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Record {
+pub(crate) enum Record {
     /// A frame: time, end-effector pose, gripper, object poses (sorted by name) and, when the
     /// recorder ran the online detector, its state.
     Frame {
@@ -82,7 +82,7 @@ pub enum Record {
 /// Why a line of a JSONL demonstration cannot be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
-pub enum LineError {
+pub(crate) enum LineError {
     /// The first line is not a header.
     #[error("not an `akl_demo` header: {0}")]
     NotHeader(String),
@@ -115,7 +115,7 @@ impl From<LineError> for String {
 }
 
 /// Parses the header line; the error says what is wrong.
-pub fn parse_header(line: &str) -> Result<DemoHeader, LineError> {
+pub(crate) fn parse_header(line: &str) -> Result<DemoHeader, LineError> {
     let header: DemoHeader =
         serde_json::from_str(line).map_err(|e| LineError::NotHeader(plain(&e, line)))?;
     if header.akl_demo != DEMO_VERSION {
@@ -125,7 +125,7 @@ pub fn parse_header(line: &str) -> Result<DemoHeader, LineError> {
 }
 
 /// Parses a frame or event line; the error says what is wrong.
-pub fn parse_record(line: &str) -> Result<Record, LineError> {
+pub(crate) fn parse_record(line: &str) -> Result<Record, LineError> {
     let value: serde_json::Value =
         serde_json::from_str(line).map_err(|e| LineError::Json(plain(&e, line)))?;
     if value.get("event").is_some() {
@@ -216,14 +216,14 @@ pub fn write_jsonl(demo: &Demo) -> String {
 /// Streams a demonstration into JSONL as it is recorded: a line per frame and per event,
 /// flushed at every event and at least once a second of demonstration time, so a killed
 /// recording keeps everything but its last second.
-pub struct JsonlDemoWriter<W: Write> {
+pub(crate) struct JsonlDemoWriter<W: Write> {
     out: W,
     last_flush: f64,
 }
 
 impl<W: Write> JsonlDemoWriter<W> {
     /// Starts a recording with its header line.
-    pub fn new(mut out: W, header: &DemoHeader) -> std::io::Result<Self> {
+    pub(crate) fn new(mut out: W, header: &DemoHeader) -> std::io::Result<Self> {
         serde_json::to_writer(&mut out, header)?;
         out.write_all(b"\n")?;
         out.flush()?;
@@ -234,7 +234,7 @@ impl<W: Write> JsonlDemoWriter<W> {
     }
 
     /// Writes frame `i` of `demo` (with its detector state when it has one).
-    pub fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
+    pub(crate) fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
         let frame = FrameLine {
             t: demo.times[i],
             ee: PoseJson::from_pose(&demo.ee[i]),
@@ -256,7 +256,7 @@ impl<W: Write> JsonlDemoWriter<W> {
     }
 
     /// Writes a dialogue event or keyframe mark.
-    pub fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+    pub(crate) fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
         let (name, value) = match event.kind {
             DialogueKind::Query => (EventName::Query, None),
             DialogueKind::Answer(a) => (EventName::Answer, Some(a)),
@@ -274,7 +274,7 @@ impl<W: Write> JsonlDemoWriter<W> {
     }
 
     /// Flushes and returns the underlying writer.
-    pub fn finish(mut self) -> std::io::Result<W> {
+    pub(crate) fn finish(mut self) -> std::io::Result<W> {
         self.out.flush()?;
         Ok(self.out)
     }
@@ -372,7 +372,7 @@ impl DemoBuilder {
 }
 
 /// Index of the last frame at or before `t` (0 before the first frame).
-pub fn frame_at(times: &[f64], t: f64) -> usize {
+pub(crate) fn frame_at(times: &[f64], t: f64) -> usize {
     times.partition_point(|&x| x <= t).saturating_sub(1)
 }
 

@@ -4,7 +4,7 @@
 use akl_tsr::nalgebra::Vector3;
 
 /// Eq. 3.2: the distance of `c` from the line through `a` and `b` (0 when `a == b`).
-pub fn line_error(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> f64 {
+pub(crate) fn line_error(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> f64 {
     let u = b - a;
     let v = c - b;
     let len = u.norm();

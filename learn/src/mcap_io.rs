@@ -13,28 +13,27 @@ use std::time::{Duration, Instant};
 
 use akl_foxglove::schema::{boolean, integer, object, object_with_optional, string};
 use akl_foxglove::{Channel, Log, LogLevel, McapWriter, Message, PoseInFrame, Schema, Time};
-use akl_tsr::{Gripper, Pose};
-use k::nalgebra::{Quaternion, Translation3, UnitQuaternion};
-use serde::Serialize;
+use akl_tsr::{Gripper, Pose, PoseJson};
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use crate::demo::{Answer, Demo, DemoHeader, DialogueEvent, DialogueKind, DEMO_VERSION};
 use crate::demo_error::DemoError;
 use crate::dialogue::{QUERY, SUGGESTION};
-use crate::session::{write_demo, RecordingSink};
+use crate::session::RecordingSink;
 use crate::validate::FrameChecker;
 
 /// The first bytes of every MCAP file.
-pub const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+pub(crate) const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 /// Longest stretch of recording kept in an unfinished chunk.
-pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
+pub(crate) const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 
 /// `akl.Gripper`: the gripper's state in one frame.
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct GripperState {
     /// `open` or `closed`.
-    state: &'static str,
+    state: Gripper,
 }
 
 impl Schema for GripperState {
@@ -51,7 +50,7 @@ impl Message for GripperState {
 }
 
 /// `akl.Detector`: whether the online detector saw a straight line in one frame.
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct DetectorState {
     /// The detector's state.
     constrained: bool,
@@ -88,7 +87,7 @@ impl Message for DemoHeader {
 }
 
 /// Streams a demonstration into an MCAP file.
-pub struct McapDemoWriter<W: Write + Seek> {
+pub(crate) struct McapDemoWriter<W: Write + Seek> {
     writer: McapWriter<W>,
     ee: Channel<PoseInFrame>,
     objects: Vec<Channel<PoseInFrame>>,
@@ -113,7 +112,7 @@ fn pose_message(t: f64, frame: &str, pose: &Pose) -> PoseInFrame {
 
 impl<W: Write + Seek> McapDemoWriter<W> {
     /// Starts a recording of `header` with the named objects.
-    pub fn new(out: W, header: &DemoHeader, objects: &[String]) -> std::io::Result<Self> {
+    pub(crate) fn new(out: W, header: &DemoHeader, objects: &[String]) -> std::io::Result<Self> {
         let options = mcap::WriteOptions::new().profile("akl").chunk_size(None);
         let mut writer = McapWriter::new(out, options).map_err(write_error)?;
         let header_channel = writer
@@ -165,7 +164,7 @@ impl<W: Write + Seek> McapDemoWriter<W> {
     }
 
     /// Writes frame `i` of `demo`.
-    pub fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
+    pub(crate) fn write_frame(&mut self, demo: &Demo, i: usize) -> std::io::Result<()> {
         let t = demo.times[i];
         self.maybe_flush(t)?;
         let frame = &demo.header.frame;
@@ -176,10 +175,7 @@ impl<W: Write + Seek> McapDemoWriter<W> {
             w.write(*channel, t, &pose_message(t, frame, &track.poses[i]))
                 .map_err(write_error)?;
         }
-        let state = match demo.gripper[i] {
-            Gripper::Open => "open",
-            Gripper::Closed => "closed",
-        };
+        let state = demo.gripper[i];
         w.write(self.gripper, t, &GripperState { state })
             .map_err(write_error)?;
         if let Some(&constrained) = demo.detector.get(i) {
@@ -190,7 +186,7 @@ impl<W: Write + Seek> McapDemoWriter<W> {
     }
 
     /// Writes a dialogue event as a `foxglove.Log` line (with `name` = `akl.<kind>`).
-    pub fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
+    pub(crate) fn write_event(&mut self, event: &DialogueEvent) -> std::io::Result<()> {
         let (name, message) = match event.kind {
             DialogueKind::Query => ("akl.query", QUERY.to_string()),
             DialogueKind::Answer(a) => ("akl.answer", answer_word(a).to_string()),
@@ -203,14 +199,15 @@ impl<W: Write + Seek> McapDemoWriter<W> {
             .map_err(write_error)
     }
 
-    /// Writes a whole demonstration and finishes the file.
-    pub fn write_all(mut self, demo: &Demo) -> std::io::Result<W> {
-        write_demo(&mut self, demo)?;
+    /// Writes a whole demonstration and finishes the file (the tests' round trips).
+    #[cfg(test)]
+    pub(crate) fn write_all(mut self, demo: &Demo) -> std::io::Result<W> {
+        crate::session::write_demo(&mut self, demo)?;
         self.finish()
     }
 
     /// Writes the summary and returns the underlying writer.
-    pub fn finish(self) -> std::io::Result<W> {
+    pub(crate) fn finish(self) -> std::io::Result<W> {
         self.writer.finish().map_err(write_error)
     }
 }
@@ -277,40 +274,29 @@ pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> 
         let t = t_ns as f64 / 1e9;
         let bad =
             |what: &str| DemoError::Format(format!("message on {topic} at t = {t:.3} s: {what}"));
-        let value: Value =
-            serde_json::from_slice(&message.data).map_err(|e| bad(&format!("not JSON: {e}")))?;
+        let data = message.data.as_ref();
         match topic {
-            "/akl/header" => {
-                header = Some(serde_json::from_value(value).map_err(|e| bad(&e.to_string()))?)
-            }
+            "/akl/header" => header = Some(decode::<DemoHeader>(data).map_err(|e| bad(&e))?),
             "/ee" => {
-                frames.entry(t_ns).or_default().ee = Some(parse_pose(&value).map_err(|e| bad(&e))?)
+                let pose = decode::<PoseRead>(data).and_then(PoseRead::into_pose);
+                frames.entry(t_ns).or_default().ee = Some(pose.map_err(|e| bad(&e))?)
             }
             "/gripper" => {
-                let state = match value.get("state").and_then(Value::as_str) {
-                    Some("open") => Gripper::Open,
-                    Some("closed") => Gripper::Closed,
-                    _ => return Err(bad("`state` must be open or closed")),
-                };
+                let GripperState { state } = decode(data).map_err(|e| bad(&e))?;
                 frames.entry(t_ns).or_default().gripper = Some(state);
             }
             "/detector" => {
-                let c = value
-                    .get("constrained")
-                    .and_then(Value::as_bool)
-                    .ok_or_else(|| bad("`constrained` must be a boolean"))?;
-                frames.entry(t_ns).or_default().detector = Some(c);
+                let DetectorState { constrained } = decode(data).map_err(|e| bad(&e))?;
+                frames.entry(t_ns).or_default().detector = Some(constrained);
             }
             "/dialogue" => {
-                let kind = match value.get("name").and_then(Value::as_str) {
-                    Some("akl.query") => DialogueKind::Query,
-                    Some("akl.suggestion") => DialogueKind::Suggestion,
-                    Some("akl.keyframe") => DialogueKind::Keyframe,
-                    Some("akl.answer") => DialogueKind::Answer(
-                        value
-                            .get("message")
-                            .and_then(Value::as_str)
-                            .and_then(crate::dialogue::parse_answer)
+                let LogRead { name, message } = decode(data).map_err(|e| bad(&e))?;
+                let kind = match name.as_str() {
+                    "akl.query" => DialogueKind::Query,
+                    "akl.suggestion" => DialogueKind::Suggestion,
+                    "akl.keyframe" => DialogueKind::Keyframe,
+                    "akl.answer" => DialogueKind::Answer(
+                        crate::dialogue::parse_answer(&message)
                             .ok_or_else(|| bad("an answer must say yes, no or unknown"))?,
                     ),
                     _ => continue,
@@ -326,7 +312,9 @@ pub fn read_mcap(bytes: &[u8]) -> Result<(Demo, Option<Truncation>), DemoError> 
                             object_names.len() - 1
                         }
                     };
-                    let pose = parse_pose(&value).map_err(|e| bad(&e))?;
+                    let pose = decode::<PoseRead>(data)
+                        .and_then(PoseRead::into_pose)
+                        .map_err(|e| bad(&e))?;
                     let frame = frames.entry(t_ns).or_default();
                     if frame.objects.len() <= index {
                         frame.objects.resize(index + 1, None);
@@ -423,40 +411,73 @@ struct PartialFrame {
     objects: Vec<Option<Pose>>,
 }
 
-fn parse_pose(value: &Value) -> Result<Pose, String> {
-    let get = |path: [&str; 3]| -> Result<f64, String> {
-        let v = value
-            .get(path[0])
-            .and_then(|v| v.get(path[1]))
-            .and_then(|v| v.get(path[2]))
-            .and_then(Value::as_f64)
-            .ok_or_else(|| format!("missing {}.{}.{}", path[0], path[1], path[2]))?;
-        if v.is_finite() {
-            Ok(v)
+/// A message's JSON as `T`; the error is serde's, without a position (the caller names the
+/// topic and time).
+fn decode<T: serde::de::DeserializeOwned>(data: &[u8]) -> Result<T, String> {
+    serde_json::from_slice(data).map_err(|e| {
+        let plain = match std::str::from_utf8(data) {
+            Ok(text) => akl_tsr::describe_json_error(&e, text).2,
+            Err(_) => e.to_string(),
+        };
+        if e.is_syntax() || e.is_eof() {
+            format!("not JSON: {plain}")
         } else {
-            Err(format!("{}.{}.{} is not finite", path[0], path[1], path[2]))
+            plain
         }
-    };
-    let p = [
-        get(["pose", "position", "x"])?,
-        get(["pose", "position", "y"])?,
-        get(["pose", "position", "z"])?,
-    ];
-    let q = [
-        get(["pose", "orientation", "x"])?,
-        get(["pose", "orientation", "y"])?,
-        get(["pose", "orientation", "z"])?,
-        get(["pose", "orientation", "w"])?,
-    ];
-    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if (norm - 1.0).abs() > akl_tsr::pose::QUATERNION_NORM_TOLERANCE {
-        return Err(format!("quaternion is not unit length (norm {norm:.6})"));
+    })
+}
+
+/// `foxglove.PoseInFrame` as read back: only the pose; its time is the message's log time.
+#[derive(Deserialize)]
+struct PoseRead {
+    pose: PoseFields,
+}
+
+/// `foxglove.Pose`: a position and an orientation.
+#[derive(Deserialize)]
+struct PoseFields {
+    position: Xyz,
+    orientation: Xyzw,
+}
+
+/// `foxglove.Vector3`.
+#[derive(Deserialize)]
+struct Xyz {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+/// `foxglove.Quaternion`.
+#[derive(Deserialize)]
+struct Xyzw {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+impl PoseRead {
+    /// The pose, checked like every pose AKL reads (finite, unit quaternion).
+    fn into_pose(self) -> Result<Pose, String> {
+        let PoseFields {
+            position: p,
+            orientation: q,
+        } = self.pose;
+        let json = PoseJson {
+            p: [p.x, p.y, p.z],
+            q: [q.x, q.y, q.z, q.w],
+        };
+        json.to_pose().map_err(|e| format!("pose: {e}"))
     }
-    let rotation = UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2]));
-    Ok(Pose::from_parts(
-        Translation3::new(p[0], p[1], p[2]),
-        rotation,
-    ))
+}
+
+/// `foxglove.Log` as read back: which dialogue event (`name`) and, for an answer, its word.
+#[derive(Deserialize)]
+struct LogRead {
+    name: String,
+    #[serde(default)]
+    message: String,
 }
 
 #[cfg(test)]
@@ -540,5 +561,78 @@ mod tests {
     #[test]
     fn garbage_is_not_a_demonstration() {
         assert!(matches!(read_mcap(b"hello"), Err(DemoError::Format(_))));
+    }
+    /// An MCAP demo whose only message besides a valid header and an `/ee` pose at t = 0.5 s is
+    /// `message`, written as-is on `topic` at the same time.
+    fn one_frame_with(topic: &str, message: Value) -> Vec<u8> {
+        #[derive(Serialize)]
+        #[serde(transparent)]
+        struct Raw(Value);
+        impl Schema for Raw {
+            fn schema() -> Value {
+                json!({"type": "object"})
+            }
+        }
+        impl Message for Raw {
+            const NAME: &'static str = "test.Raw";
+        }
+        let out = std::io::Cursor::new(Vec::new());
+        let mut w = McapWriter::new(out, mcap::WriteOptions::default()).unwrap();
+        let header = w.channel::<DemoHeader>("/akl/header").unwrap();
+        w.write(header, 0.0, &DemoHeader::new("pick_place"))
+            .unwrap();
+        let ee = w.channel::<PoseInFrame>("/ee").unwrap();
+        w.write(ee, 0.5, &pose_message(0.5, "world", &Pose::identity()))
+            .unwrap();
+        let raw = w.channel::<Raw>(topic).unwrap();
+        w.write(raw, 0.5, &Raw(message)).unwrap();
+        w.finish().unwrap().into_inner()
+    }
+
+    #[test]
+    fn a_malformed_message_is_named_by_topic_and_time() {
+        let cases = [
+            (
+                "/gripper",
+                json!({"state": "ajar"}),
+                "unknown variant `ajar`",
+            ),
+            (
+                "/detector",
+                json!({"constrained": "yes"}),
+                "expected a boolean",
+            ),
+            (
+                "/dialogue",
+                json!({"name": "akl.answer", "message": "perhaps"}),
+                "yes, no or unknown",
+            ),
+            (
+                "/dialogue",
+                json!({"message": "yes"}),
+                "missing field `name`",
+            ),
+            (
+                "/objects/part",
+                json!({"pose": {"position": {"x": 0.0}}}),
+                "missing field",
+            ),
+            (
+                "/objects/part",
+                json!({"pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 2.0}}}),
+                "not unit length",
+            ),
+        ];
+        for (topic, message, expected) in cases {
+            let err = read_mcap(&one_frame_with(topic, message)).unwrap_err();
+            let text = err.to_string();
+            assert!(matches!(err, DemoError::Format(_)), "{text}");
+            assert!(
+                text.contains(&format!("message on {topic} at t = 0.500 s")),
+                "{text}"
+            );
+            assert!(text.contains(expected), "{topic}: {text}");
+        }
     }
 }

@@ -145,7 +145,7 @@ fn total(lengths: impl Iterator<Item = f64>) -> f64 {
 }
 
 /// `learned` with each keyframe's `t0_w` replaced by the truth's pose of the same reference.
-pub fn ground_on_truth(learned: &TaskSpec, truth: &TaskSpec) -> TaskSpec {
+pub(crate) fn ground_on_truth(learned: &TaskSpec, truth: &TaskSpec) -> TaskSpec {
     let mut out = learned.clone();
     for kf in &mut out.keyframes {
         if let Some(t) = truth.keyframes.iter().find(|t| t.reference == kf.reference) {

@@ -12,7 +12,7 @@ use crate::demo::{Demo, DemoHeader, DialogueEvent};
 use crate::demo_error::DemoError;
 use crate::jsonl::{read_jsonl, JsonlDemoWriter};
 use crate::mcap_io::{read_mcap, McapDemoWriter, Truncation, MCAP_MAGIC};
-use crate::session::{write_demo, RecordingSink};
+use crate::session::RecordingSink;
 use crate::shapes::prepare_shapes;
 
 /// The two demonstration formats.
@@ -201,14 +201,16 @@ impl RecordingSink for Recording {
 }
 
 /// `<path>.partial`.
-pub fn partial_path(path: &Path) -> PathBuf {
+pub(crate) fn partial_path(path: &Path) -> PathBuf {
     let mut name = path.as_os_str().to_os_string();
     name.push(".partial");
     PathBuf::from(name)
 }
 
-/// Writes a whole demonstration to `path` in the format its name asks for, atomically.
-pub fn write_demo_file(path: &Path, demo: &Demo) -> Result<PathBuf, DemoFileError> {
+/// Writes a whole demonstration to `path` in the format its name asks for, atomically (the
+/// tests' round trips).
+#[cfg(test)]
+pub(crate) fn write_demo_file(path: &Path, demo: &Demo) -> Result<PathBuf, DemoFileError> {
     let names: Vec<String> = demo.objects.iter().map(|o| o.name.clone()).collect();
     let mut recording = Recording::create(path, &demo.header, &names)?;
     let partial = recording.partial_path().to_path_buf();
@@ -216,7 +218,7 @@ pub fn write_demo_file(path: &Path, demo: &Demo) -> Result<PathBuf, DemoFileErro
         path: partial.clone(),
         source,
     };
-    write_demo(&mut recording, demo).map_err(io)?;
+    crate::session::write_demo(&mut recording, demo).map_err(io)?;
     recording.finish()
 }
 

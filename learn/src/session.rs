@@ -23,7 +23,7 @@ pub trait RecordingSink {
 
 /// Writes a whole recorded `demo` into `sink`, frames and events merged in time order (an
 /// event at the same frame as a frame follows it), as a live session would have.
-pub fn write_demo(sink: &mut dyn RecordingSink, demo: &Demo) -> std::io::Result<()> {
+pub(crate) fn write_demo(sink: &mut dyn RecordingSink, demo: &Demo) -> std::io::Result<()> {
     let mut events = demo.events.iter().peekable();
     for i in 0..demo.len() {
         sink.frame(demo, i)?;

@@ -78,12 +78,52 @@ pub fn session_header(recorded: &DemoHeader, calibration: Option<&str>) -> DemoH
     header
 }
 
+/// Where a paced recording reads the time and waits: [`WallClock`] for real time; tests play
+/// on a simulated clock instead, so pacing is checked without waiting.
+pub trait Clock: std::fmt::Debug {
+    /// Time since an origin fixed when the clock was made; never decreases.
+    fn now(&self) -> Duration;
+    /// Waits `duration` on this clock.
+    fn sleep(&self, duration: Duration);
+}
+
+/// The real clock: monotonic time (`Instant`) and thread sleeps.
+#[derive(Debug, Clone, Copy)]
+pub struct WallClock {
+    origin: Instant,
+}
+
+impl WallClock {
+    /// A wall clock whose origin is now.
+    pub fn new() -> Self {
+        WallClock {
+            origin: Instant::now(),
+        }
+    }
+}
+
+impl Default for WallClock {
+    fn default() -> Self {
+        WallClock::new()
+    }
+}
+
+impl Clock for WallClock {
+    fn now(&self) -> Duration {
+        self.origin.elapsed()
+    }
+
+    fn sleep(&self, duration: Duration) {
+        std::thread::sleep(duration);
+    }
+}
+
 /// How a recorded demonstration is played into a session.
 #[derive(Debug, Default)]
 pub struct Pace<'a> {
-    /// Play frames at the pace of their timestamps (as a live teacher would), instead of as
-    /// fast as possible.
-    pub realtime: bool,
+    /// Play frames at the pace of their timestamps on this clock (as a live teacher would;
+    /// [`WallClock`] for real time), instead of as fast as possible (`None`).
+    pub realtime: Option<&'a dyn Clock>,
     /// Stop early, keeping what was played, once this is set (e.g. by Ctrl-C).
     pub stop: Option<&'a AtomicBool>,
 }
@@ -92,7 +132,8 @@ pub struct Pace<'a> {
 /// marks after the frames they follow.
 struct Player<'p> {
     pace: &'p Pace<'p>,
-    started: Instant,
+    /// When playing began on the pace's clock (zero when not paced).
+    started: Duration,
     next_mark: usize,
 }
 
@@ -100,7 +141,7 @@ impl<'p> Player<'p> {
     fn new(pace: &'p Pace<'p>) -> Self {
         Player {
             pace,
-            started: Instant::now(),
+            started: pace.realtime.map_or(Duration::ZERO, |clock| clock.now()),
             next_mark: 0,
         }
     }
@@ -119,10 +160,11 @@ impl<'p> Player<'p> {
             if self.pace.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
                 return Ok(true);
             }
-            if self.pace.realtime {
+            if let Some(clock) = self.pace.realtime {
                 let due = Duration::from_secs_f64((demo.times[i] - demo.times[0]).max(0.0));
-                if let Some(wait) = due.checked_sub(self.started.elapsed()) {
-                    std::thread::sleep(wait);
+                let elapsed = clock.now().saturating_sub(self.started);
+                if let Some(wait) = due.checked_sub(elapsed) {
+                    clock.sleep(wait);
                 }
             }
             poses.clear();
@@ -264,6 +306,7 @@ mod tests {
     use crate::dialogue::AllYes;
     use crate::teacher::demonstrate;
     use akl_scene::{builtin, Task};
+    use std::cell::Cell;
 
     fn answers(demo: &Demo) -> Vec<Answer> {
         demo.events
@@ -296,6 +339,113 @@ mod tests {
         }
     }
 
+    /// A clock that moves only when slept on, plus `work` at every reading, as if each frame
+    /// took that long to process; it adds up what was slept.
+    #[derive(Debug)]
+    struct SimulatedClock {
+        now: Cell<Duration>,
+        work: Duration,
+        slept: Cell<Duration>,
+    }
+
+    impl SimulatedClock {
+        fn new(work: Duration) -> Self {
+            SimulatedClock {
+                now: Cell::new(Duration::ZERO),
+                work,
+                slept: Cell::new(Duration::ZERO),
+            }
+        }
+    }
+
+    impl Clock for SimulatedClock {
+        fn now(&self) -> Duration {
+            self.now.set(self.now.get() + self.work);
+            self.now.get()
+        }
+
+        fn sleep(&self, duration: Duration) {
+            self.now.set(self.now.get() + duration);
+            self.slept.set(self.slept.get() + duration);
+        }
+    }
+
+    /// A sink noting the clock's time (without reading it as work) when each frame arrives.
+    struct Stamps<'a> {
+        clock: &'a SimulatedClock,
+        at: Vec<f64>,
+    }
+
+    impl RecordingSink for Stamps<'_> {
+        fn frame(&mut self, _: &Demo, _: usize) -> std::io::Result<()> {
+            self.at.push(self.clock.now.get().as_secs_f64());
+            Ok(())
+        }
+
+        fn event(&mut self, _: &crate::demo::DialogueEvent) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    /// Plays the inspection demonstration at a realtime pace on `clock`: when each frame
+    /// arrived on the clock, and each frame's time since the first.
+    fn play_paced(clock: &SimulatedClock) -> (Vec<f64>, Vec<f64>) {
+        let task = builtin::resolve("inspection").unwrap();
+        let sim = demonstrate(&task, &task.world, &TeacherProfile::careful(), 1).unwrap();
+        let mut stamps = Stamps {
+            clock,
+            at: Vec::new(),
+        };
+        let pace = Pace {
+            realtime: Some(clock),
+            stop: None,
+        };
+        let (demo, stopped) = stream_demo(
+            &sim.demo,
+            session_header(&sim.demo.header, None),
+            &sim.marked_keyframes,
+            Calibration::default(),
+            &mut AllYes,
+            Some(&mut stamps),
+            &pace,
+        )
+        .unwrap();
+        assert!(!stopped);
+        assert_eq!(stamps.at.len(), demo.len());
+        let due = demo.times.iter().map(|t| t - demo.times[0]).collect();
+        (stamps.at, due)
+    }
+
+    /// A realtime pace with time to spare plays every frame exactly at its time on the clock:
+    /// never early, and never late by waits that add up.
+    #[test]
+    fn a_realtime_pace_plays_each_frame_at_its_time() {
+        let clock = SimulatedClock::new(Duration::ZERO);
+        let (at, due) = play_paced(&clock);
+        assert!(due.last().unwrap() > &10.0);
+        for (i, (at, due)) in at.iter().zip(&due).enumerate() {
+            assert!(
+                (at - due).abs() < 1e-6,
+                "frame {i} at {at} s, due at {due} s"
+            );
+        }
+        let slept = clock.slept.get().as_secs_f64();
+        assert!(
+            (slept - due.last().unwrap()).abs() < 1e-6,
+            "slept {slept} s"
+        );
+    }
+
+    /// A realtime pace that has fallen behind (each frame takes twice its period to process)
+    /// never waits, and no frame comes before its time.
+    #[test]
+    fn a_realtime_pace_behind_its_frames_does_not_wait() {
+        let clock = SimulatedClock::new(Duration::from_millis(20));
+        let (at, due) = play_paced(&clock);
+        assert!(at.iter().zip(&due).all(|(at, due)| at >= due));
+        assert_eq!(clock.slept.get(), Duration::ZERO);
+    }
+
     /// The stop flag ends a played recording at the next frame, keeping what was played.
     #[test]
     fn the_stop_flag_ends_a_recording_keeping_what_was_played() {
@@ -308,7 +458,7 @@ mod tests {
             frames: 0,
         };
         let pace = Pace {
-            realtime: false,
+            realtime: None,
             stop: Some(&stop),
         };
         let (demo, stopped) = stream_demo(

@@ -42,7 +42,7 @@ pub fn denoise(y: &[f64], lambda: f64) -> Vec<f64> {
 ///
 /// # Panics
 /// If `x.len() != y.len()` (a programming error, never input-driven).
-pub fn denoise_into(y: &[f64], lambda: f64, x: &mut [f64]) {
+pub(crate) fn denoise_into(y: &[f64], lambda: f64, x: &mut [f64]) {
     assert_eq!(x.len(), y.len(), "output length must equal input length");
     let n = y.len();
     if n == 0 {

@@ -32,19 +32,19 @@ impl From<FrameError> for String {
 /// Checks frames as they arrive: finite, strictly increasing times and the same set of objects
 /// in every frame (an object that appears or vanishes mid-demo cannot be tracked or grounded).
 #[derive(Debug, Default)]
-pub struct FrameChecker {
+pub(crate) struct FrameChecker {
     last_time: Option<f64>,
     objects: Option<Vec<String>>,
 }
 
 impl FrameChecker {
     /// The objects of the frames checked so far (empty before the first frame).
-    pub fn objects(&self) -> &[String] {
+    pub(crate) fn objects(&self) -> &[String] {
         self.objects.as_deref().unwrap_or(&[])
     }
 
     /// Checks the next frame's time and object names; the message says what is wrong.
-    pub fn check(&mut self, t: f64, objects: &[&str]) -> Result<(), FrameError> {
+    pub(crate) fn check(&mut self, t: f64, objects: &[&str]) -> Result<(), FrameError> {
         if !t.is_finite() {
             return Err(FrameError::TimeNotFinite(t));
         }

@@ -5,13 +5,12 @@
 //! sampling makes; and the survey that chose the sampling and the calibration's settings.
 
 use akl_learn::calibration::{Calibration, Motion, Sampling, TankRule, SAMPLING};
-use akl_learn::demo::{Demo, DialogueKind};
-use akl_learn::detector::replay;
-use akl_learn::okl::segment::runs;
+use akl_learn::{learn_spec, Demo, Detector, DialogueKind, LearnOptions, Method};
+
+use akl_learn::okl::runs;
 use akl_learn::okl::OklParams;
 use akl_learn::teach::{oracle, oracle_for, run_session, teach_simulated, Pace};
 use akl_learn::teacher::{calibration_demos_with, demonstrate, SimulatedDemo, TeacherProfile};
-use akl_learn::{learn_spec, LearnOptions, Method};
 use akl_scene::{builtin, Task};
 use std::ops::RangeInclusive;
 
@@ -149,7 +148,7 @@ fn curved_motion_is_asked_about_no_more_than_before() {
     for profile in [TeacherProfile::careful(), TeacherProfile::novice()] {
         for seed in 0..10 {
             let (_, circle) = calibration_demos_with(&profile, seed, 0.3).unwrap();
-            let (states, _) = replay(Calibration::default(), &Motion::of(&circle));
+            let (states, _) = Detector::replay(Calibration::default(), &Motion::of(&circle));
             assert!(!states.iter().any(|c| *c), "seed {seed}");
         }
     }
@@ -341,7 +340,7 @@ fn detector_survey() {
         for profile in [TeacherProfile::careful(), TeacherProfile::novice()] {
             for seed in 0..10 {
                 let (_, c) = calibration_demos_with(&profile, seed, 0.3).unwrap();
-                let (_, switches) = replay(cal, &Motion::of(&c));
+                let (_, switches) = Detector::replay(cal, &Motion::of(&c));
                 circle += switches.iter().filter(|(_, s)| s.constrained).count();
             }
         }

@@ -4,13 +4,11 @@
 //! line grounded on the scanner it passes over.
 
 use akl_learn::calibration::Calibration;
-use akl_learn::demo::{Answer, Demo, DialogueKind};
 use akl_learn::dialogue::{AnswerSource, DialogueError, ListedAnswers, Question};
 use akl_learn::okl::synth::DemoBuilder;
-use akl_learn::session::SessionError;
 use akl_learn::teach::{oracle_for, run_session, session_header, stream_demo, Pace};
 use akl_learn::teacher::{demonstrate, TeacherProfile};
-use akl_learn::{learn_spec, LearnOptions, Method};
+use akl_learn::{learn_spec, Answer, Demo, DialogueKind, LearnOptions, Method, SessionError};
 use akl_scene::builtin;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::{Constraint, Gripper, KeyframeKind, TaskSpec, WORLD_FRAME};
@@ -391,8 +389,8 @@ fn the_inspection_line_is_grounded_on_the_middle_scanner() {
 #[test]
 #[ignore = "a survey: run with --ignored --nocapture"]
 fn pass_over_survey() {
-    use akl_learn::okl::pass_over::crossings;
-    use akl_learn::okl::{line_path, reference::scene_objects};
+    use akl_learn::okl::crossings;
+    use akl_learn::okl::{line_path, scene_objects};
     let task = builtin::resolve("inspection").unwrap();
     let mut seen: std::collections::BTreeMap<String, (f64, f64)> = Default::default();
     for profile in [TeacherProfile::careful(), TeacherProfile::novice()] {
@@ -447,8 +445,8 @@ fn pass_over_survey() {
 #[test]
 #[ignore = "a survey: run with --release --ignored --nocapture"]
 fn tvd_lambda_survey() {
-    use akl_learn::measures::{score, Tolerance};
     use akl_learn::okl::OklParams;
+    use akl_learn::{score, Tolerance};
     for lambda in [0.0005, 0.002, 0.02, 0.2, 0.6, 2.0, 6.0, 20.0] {
         let options = LearnOptions {
             okl: OklParams {

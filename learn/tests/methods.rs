@@ -2,14 +2,12 @@
 //! through the real online detector and dialogue, scored against the ground truths.
 
 use akl_learn::calibration::Calibration;
-use akl_learn::demo::{Answer, Demo};
 use akl_learn::dialogue::{AllYes, AnswerSource, ListedAnswers};
-use akl_learn::measures::{score, Tolerance};
-use akl_learn::okl::segment::runs;
+use akl_learn::okl::runs;
 use akl_learn::okl::synth::DemoBuilder;
 use akl_learn::teach::{oracle_for, run_session};
 use akl_learn::teacher::{demonstrate, SimulatedDemo, TeacherProfile};
-use akl_learn::{learn_spec, LearnOptions, Method};
+use akl_learn::{learn_spec, score, Answer, Demo, LearnOptions, Method, Tolerance};
 use akl_scene::{builtin, Task};
 use akl_tsr::{Constraint, KeyframeKind, TaskSpec};
 

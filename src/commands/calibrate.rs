@@ -4,7 +4,7 @@ use super::print_json;
 use crate::cli::CalibrateArgs;
 use crate::exit::{CliError, CliResult};
 use akl_learn::calibration::{Calibration, Motion, Separation};
-use akl_learn::recording::read_demo_file;
+use akl_learn::read_demo_file;
 use akl_learn::teacher::calibration_demos;
 use serde::Serialize;
 use std::path::Path;

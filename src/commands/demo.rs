@@ -12,7 +12,7 @@ use crate::exit::{CliError, CliResult};
 use crate::table::Table;
 use akl_exec::ExecOptions;
 use akl_learn::calibration::Calibration;
-use akl_learn::measures::{score, Tolerance};
+use akl_learn::{score, Tolerance};
 
 pub(super) fn run(args: DemoArgs) -> CliResult {
     if args.trials == 0 {

@@ -5,12 +5,11 @@ use crate::answers::answer_source;
 use crate::cli::LearnArgs;
 use crate::exit::{CliError, CliResult};
 use akl_learn::dialogue::AnswerSource;
-use akl_learn::method::{needs_replay, recorded_answers, without_dialogue};
 use akl_learn::okl::OklParams;
-use akl_learn::recording::read_demo_file;
-use akl_learn::ros2::{import_ros2, PoseSource, Ros2Topics};
-use akl_learn::shapes::read_shapes_file;
-use akl_learn::{learn_spec, prepare, Demo, LearnOptions, Method};
+use akl_learn::{
+    import_ros2, learn_spec, needs_replay, prepare, read_demo_file, read_shapes_file,
+    recorded_answers, without_dialogue, Demo, LearnOptions, Method, PoseSource, Ros2Topics,
+};
 use akl_scene::builtin;
 use akl_tsr::{Bounds, TaskSpec};
 use serde::Serialize;

@@ -3,7 +3,7 @@
 use super::print_json;
 use crate::cli::ScoreArgs;
 use crate::exit::{CliError, CliResult};
-use akl_learn::measures::{score, Tolerance};
+use akl_learn::{score, Tolerance};
 use akl_scene::builtin;
 use akl_tsr::TaskSpec;
 use std::path::Path;

@@ -6,15 +6,14 @@ use crate::cli::{TeachArgs, Teacher};
 use crate::exit::{CliError, CliResult};
 use crate::stop::on_ctrl_c;
 use akl_learn::calibration::Calibration;
-use akl_learn::demo::DemoHeader;
-use akl_learn::demo::{Answer, DialogueKind};
-use akl_learn::live::{LiveEnd, LiveStream};
 use akl_learn::okl::{LearnError, OklParams};
-use akl_learn::recording::Recording;
-use akl_learn::session::TeachingSession;
-use akl_learn::shapes::prepare_shapes;
-use akl_learn::teach::{self as learn_teach, session_header, Pace, SimulatedTeachingError};
-use akl_learn::{learn_spec, Demo, LearnOptions, Method};
+use akl_learn::teach::{
+    self as learn_teach, session_header, Clock, Pace, SimulatedTeachingError, WallClock,
+};
+use akl_learn::{
+    learn_spec, prepare_shapes, Answer, Demo, DemoHeader, DialogueKind, LearnOptions, LiveEnd,
+    LiveStream, Method, Recording, TeachingSession,
+};
 use akl_scene::{builtin, Task};
 use akl_tsr::TaskSpec;
 use serde::Serialize;
@@ -170,8 +169,9 @@ pub(crate) fn teach_simulated(
         .collect();
     let mut recording = Recording::create(t.output, &header, &names).map_err(CliError::input)?;
     let partial = recording.partial_path().to_path_buf();
+    let wall = WallClock::new();
     let pace = Pace {
-        realtime: t.realtime,
+        realtime: t.realtime.then_some(&wall as &dyn Clock),
         stop,
     };
     let taught = learn_teach::teach_simulated(

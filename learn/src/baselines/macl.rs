@@ -71,7 +71,7 @@ impl Default for MaclParams {
 }
 
 /// The frames `[start, end)` of each sliding window.
-pub fn windows(positions: &[Vector3<f64>], window: f64, stride: f64) -> Vec<(usize, usize)> {
+pub(crate) fn windows(positions: &[Vector3<f64>], window: f64, stride: f64) -> Vec<(usize, usize)> {
     let n = positions.len();
     let mut out = Vec::new();
     let mut start = 0;
@@ -91,7 +91,7 @@ pub fn windows(positions: &[Vector3<f64>], window: f64, stride: f64) -> Vec<(usi
 
 /// The inlier ratio of every frame: the longest straight stretch (in windows) that a window's
 /// line explains and that contains the frame; 0 where no window's line does.
-pub fn inlier_ratios(positions: &[Vector3<f64>], params: &MaclParams) -> Vec<f64> {
+pub(crate) fn inlier_ratios(positions: &[Vector3<f64>], params: &MaclParams) -> Vec<f64> {
     let mut ratio = vec![0.0; positions.len()];
     let mut errors = vec![0.0; positions.len()];
     for (start, end) in windows(positions, params.window, params.stride) {
@@ -141,7 +141,10 @@ fn extent(line: &Line, points: &[Vector3<f64>]) -> f64 {
 
 /// The constraint segments: maximal runs of frames whose denoised inlier ratio exceeds the
 /// threshold, as `(first, last)` frames (runs of one frame are dropped).
-pub fn constraint_segments(positions: &[Vector3<f64>], params: &MaclParams) -> Vec<(usize, usize)> {
+pub(crate) fn constraint_segments(
+    positions: &[Vector3<f64>],
+    params: &MaclParams,
+) -> Vec<(usize, usize)> {
     let smoothed = tvd::denoise(&inlier_ratios(positions, params), params.tvd_lambda);
     let above: Vec<bool> = smoothed.iter().map(|s| *s > params.threshold).collect();
     runs(&above)

@@ -9,7 +9,7 @@ use std::ops::RangeInclusive;
 
 /// Tuning of constraint extraction (see [`super::OklParams`] for the defaults and why).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ConstraintParams {
+pub(crate) struct ConstraintParams {
     /// D_F, the online detector's distance filter step (metres).
     pub filter_distance: f64,
     /// How far a detected region overshoots its line (metres): cut off its end.
@@ -24,7 +24,7 @@ pub struct ConstraintParams {
 
 /// Line 11, `getThreshold`: σ = max(e_l) + ε, the largest smoothed error over the true-line
 /// frames `line` (indices into `smoothed`) plus `epsilon`.
-pub fn threshold(smoothed: &[f64], line: &RangeInclusive<usize>, epsilon: f64) -> f64 {
+pub(crate) fn threshold(smoothed: &[f64], line: &RangeInclusive<usize>, epsilon: f64) -> f64 {
     smoothed[line.clone()]
         .iter()
         .fold(f64::NEG_INFINITY, |m, &e| m.max(e))
@@ -33,7 +33,7 @@ pub fn threshold(smoothed: &[f64], line: &RangeInclusive<usize>, epsilon: f64) -
 
 /// Line 12, `ConstraintKF`: the boundary indices of the constrained stretch — the maximal run
 /// of indices around the true line `line` whose smoothed error stays within `sigma`.
-pub fn constraint_boundaries(
+pub(crate) fn constraint_boundaries(
     smoothed: &[f64],
     line: &RangeInclusive<usize>,
     sigma: f64,
@@ -60,7 +60,7 @@ pub fn constraint_boundaries(
 /// in the next segment is about that long and its true-line part is a point; a real detection
 /// needs at least `2·D_F` of line before it switches on). Any other region is a real
 /// detection, however late: its fit starts [`ConstraintParams::lead`] before it.
-pub fn learn_constraint(
+pub(crate) fn learn_constraint(
     positions: &[Vector3<f64>],
     segment: &Segment,
     region: &RangeInclusive<usize>,

@@ -7,7 +7,7 @@ use akl_tsr::{Constraint, Gripper, KeyframeKind};
 
 /// A keyframe before grounding: where in the demo it is and what it commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RawKeyframe {
+pub(crate) struct RawKeyframe {
     /// Demonstration frame.
     pub frame: usize,
     /// Interaction, constraint or combined.
@@ -20,7 +20,7 @@ pub struct RawKeyframe {
 
 /// A learned straight-line constraint: frames `start..=end` of one interaction segment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LineConstraint {
+pub(crate) struct LineConstraint {
     /// The segment it lies in.
     pub segment: Segment,
     /// First frame of the line.
@@ -31,7 +31,7 @@ pub struct LineConstraint {
 
 /// Line 15, `AddInteractionKFs`: one keyframe per gripper command, at the frame the state
 /// changes, commanding the new state.
-pub fn interaction_keyframes(gripper: &[Gripper]) -> Vec<RawKeyframe> {
+pub(crate) fn interaction_keyframes(gripper: &[Gripper]) -> Vec<RawKeyframe> {
     gripper_changes(gripper)
         .into_iter()
         .map(|k| RawKeyframe {
@@ -45,7 +45,7 @@ pub fn interaction_keyframes(gripper: &[Gripper]) -> Vec<RawKeyframe> {
 
 /// Line 12, `ConstraintKF`: the two keyframes bounding a line; the gripper keeps the segment's
 /// state and the second keyframe carries the move-in-line constraint.
-pub fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
+pub(crate) fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
     let kf = |frame, constraint| RawKeyframe {
         frame,
         kind: KeyframeKind::Constraint,
@@ -77,7 +77,7 @@ pub fn constraint_keyframes(line: &LineConstraint) -> [RawKeyframe; 2] {
 ///
 /// The check walks the frames between a boundary and its interaction once, so the merge stays
 /// linear in the number of frames.
-pub fn combine(
+pub(crate) fn combine(
     interactions: &[RawKeyframe],
     lines: &[LineConstraint],
     positions: &[Vector3<f64>],

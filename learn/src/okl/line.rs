@@ -28,7 +28,7 @@ impl Line {
 /// detector that switches on one filtered point): the true-line part is frames `start..=m`,
 /// `m` the last frame at least `overshoot` from the region's last frame. `None` when no frame
 /// is that far (the region is too short to hold a reliable line).
-pub fn true_line(
+pub(crate) fn true_line(
     positions: &[Vector3<f64>],
     region: &RangeInclusive<usize>,
     overshoot: f64,

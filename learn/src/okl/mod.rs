@@ -13,16 +13,22 @@
 //! bounded number of detected regions per segment — except the TV denoising of those errors,
 //! linear in practice but quadratic on adversarial signals (see [`crate::tvd`]).
 
-pub mod constraint;
-pub mod keyframes;
-pub mod line;
-pub mod pass_over;
-pub mod reference;
-pub mod segment;
+pub(crate) mod constraint;
+pub(crate) mod keyframes;
+pub(crate) mod line;
+pub(crate) mod pass_over;
+pub(crate) mod reference;
+pub(crate) mod segment;
 // Synthetic demonstrations for the unit tests, and with the `synth` feature (which the crate's
 // own dev-dependency turns on) for its integration tests and benchmarks.
 #[cfg(any(test, feature = "synth"))]
 pub mod synth;
+
+pub use crate::tvd::denoise;
+pub use line::{fit_line, fitting_errors};
+pub use pass_over::crossings;
+pub use reference::scene_objects;
+pub use segment::runs;
 
 use crate::calibration::Calibration;
 use crate::demo::Demo;
@@ -34,7 +40,7 @@ use akl_tsr::{
 use constraint::{learn_constraint, ConstraintParams};
 use keyframes::{combine, interaction_keyframes, LineConstraint, RawKeyframe};
 use pass_over::{passed_over, LinePath};
-use reference::{grasped_object, nearest_to_tool, receiving_object, scene_objects, SceneObject};
+use reference::{grasped_object, nearest_to_tool, receiving_object, SceneObject};
 use segment::{constrained_regions, modify_detected_constraints, segment_trajectory};
 
 /// Why a spec could not be learned from a demo.
@@ -158,7 +164,7 @@ impl OklParams {
 /// How far a detection runs on past the end of its line with `calibration`: the window and the
 /// errors the tank needs to switch back off, one filter step each (5 cm with the shipped
 /// calibration).
-pub fn overshoot(calibration: &Calibration) -> f64 {
+pub(crate) fn overshoot(calibration: &Calibration) -> f64 {
     calibration.filter_distance * f64::from(calibration.window + calibration.switch_points())
 }
 
@@ -167,14 +173,14 @@ pub fn overshoot(calibration: &Calibration) -> f64 {
 /// further one a filter step, less one step for where the filter's steps fall on the line.
 ///
 /// [`Sampling::span`]: crate::calibration::Sampling::span
-pub fn lead(calibration: &Calibration) -> f64 {
+pub(crate) fn lead(calibration: &Calibration) -> f64 {
     let steps = 2 * calibration.window + calibration.switch_points();
     calibration.filter_distance * f64::from(steps.saturating_sub(2))
 }
 
 /// Learns a spec from `demo` with OKL. `world` (the task's world, when known) supplies shapes
 /// for finding supports and the poses of objects the demo does not track.
-pub fn learn(
+pub(crate) fn learn(
     demo: &Demo,
     world: Option<&World>,
     params: &OklParams,
@@ -206,7 +212,7 @@ pub fn learn(
 }
 
 /// The demo's task name, or `unnamed` when it has none.
-pub fn task_name(demo: &Demo) -> String {
+pub(crate) fn task_name(demo: &Demo) -> String {
     if demo.header.task.trim().is_empty() {
         "unnamed".into()
     } else {
@@ -215,7 +221,7 @@ pub fn task_name(demo: &Demo) -> String {
 }
 
 /// Checks the columns and returns the end-effector positions, one per frame.
-pub fn check_demo(demo: &Demo) -> Result<Vec<Vector3<f64>>, LearnError> {
+pub(crate) fn check_demo(demo: &Demo) -> Result<Vec<Vector3<f64>>, LearnError> {
     let n = demo.len();
     if n == 0 {
         return Err(LearnError::Empty);
@@ -263,7 +269,7 @@ fn finite(p: &Pose) -> bool {
 /// or later) as reference, `world` when no interaction follows — except a line's pure
 /// constraint keyframes over a fixed object, which get that object ([`pass_over`]) — and a TSR
 /// around the demo's end-effector pose in that object's frame with `bounds`.
-pub fn ground(
+pub(crate) fn ground(
     raw: &[RawKeyframe],
     demo: &Demo,
     world: Option<&World>,

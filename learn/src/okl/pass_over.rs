@@ -28,7 +28,7 @@ use akl_tsr::nalgebra::{Vector2, Vector3};
 /// to 5.3 cm over the three scanners, 15.0 to 15.3 cm over the table, nothing else crossed.
 /// 0.10 m sits halfway, about 5 cm from both; a line carried a hand's width above a fixture is
 /// about it, one carried at shelf height over the whole table is not.
-pub const PASS_OVER_HEIGHT: f64 = 0.10;
+pub(crate) const PASS_OVER_HEIGHT: f64 = 0.10;
 
 /// A straight motion between two frames, as the rule needs it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,7 +84,11 @@ pub fn crossings(objects: &[SceneObject], path: &LinePath, held: Option<usize>) 
 }
 
 /// The fixed object the path passes over (see the module docs), if any.
-pub fn passed_over(objects: &[SceneObject], path: &LinePath, held: Option<usize>) -> Option<usize> {
+pub(crate) fn passed_over(
+    objects: &[SceneObject],
+    path: &LinePath,
+    held: Option<usize>,
+) -> Option<usize> {
     crossings(objects, path, held)
         .into_iter()
         .filter(|c| c.clearance <= PASS_OVER_HEIGHT && c.above_bottom >= 0.0)

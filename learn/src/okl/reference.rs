@@ -44,19 +44,19 @@ use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 
 /// Minimum displacement (metres) of an object over a closed-gripper segment to count as carried.
-pub const CARRIED_MOTION: f64 = 0.01;
+pub(crate) const CARRIED_MOTION: f64 = 0.01;
 /// Largest change (metres) of a carried object's position relative to the end effector.
-pub const CARRIED_SLIP: f64 = 0.01;
+pub(crate) const CARRIED_SLIP: f64 = 0.01;
 /// Largest gap (metres) between a held object's bottom and a support's top at a release.
 /// Wider than a resting contact: the object is released slightly above its support.
-pub const SUPPORT_GAP: f64 = 0.02;
+pub(crate) const SUPPORT_GAP: f64 = 0.02;
 /// How far (metres, horizontally and vertically, centre to centre) an object may be from a
 /// released one and still be taken for what received it when shapes are unknown: 0.25. The
 /// built-in tasks put objects down at most 0.13 m (the pipe at the end of the 0.6 m rail)
 /// horizontally and 0.12 m vertically from the centre of what receives them (measured by the
 /// test `every_builtin_release_is_within_reach_of_its_receiver`); 0.25 m keeps about twice
 /// that margin while a release half a metre from everything is grounded on `world`.
-pub const RECEIVE_REACH: f64 = 0.25;
+pub(crate) const RECEIVE_REACH: f64 = 0.25;
 /// How far (metres, horizontally, centre to centre) a large support found by the third rule
 /// of [`receiving_object`] may be from the released object: 1.0. It must cover every place on
 /// the largest support a recording tracks: the built-in table (1.2 m × 1.4 m) has points
@@ -69,7 +69,7 @@ pub const RECEIVE_REACH: f64 = 0.25;
 /// 0.25 m of a neighbouring object, which rule 2 names. Taking the highest candidate instead
 /// (a mat or the rail beside the point rather than the table under it) gave 61.9 %, the
 /// nearest 71.3 %. Nothing let go 0.3 m above every top is grounded on an object.
-pub const LARGE_SUPPORT_REACH: f64 = 1.0;
+pub(crate) const LARGE_SUPPORT_REACH: f64 = 1.0;
 /// How far (metres) the centre of a large support found by the third rule of
 /// [`receiving_object`] may lie below the released object's centre: 0.17, half the height of
 /// the tallest object the built-in tasks carry (a bottle, 0.08) plus half the thickness of the
@@ -77,7 +77,7 @@ pub const LARGE_SUPPORT_REACH: f64 = 1.0;
 /// higher above everything tracked is taken to be let go in free space (the negative control
 /// `a_release_far_from_everything_is_grounded_on_the_world` in `learn/tests/fidelity.rs`: a
 /// ball let go with its centre 0.2 m above a crate's, 0.8 m away).
-pub const LARGE_SUPPORT_DROP: f64 = 0.17;
+pub(crate) const LARGE_SUPPORT_DROP: f64 = 0.17;
 
 /// One object learning can ground on: its poses over the demo and, when known, its shape.
 #[derive(Debug, Clone)]
@@ -144,7 +144,7 @@ pub fn scene_objects<'a>(demo: &'a Demo, world: Option<&World>) -> Vec<SceneObje
 }
 
 /// The object grasped at frame `grasp` and held until `hold_end` (index into `objects`).
-pub fn grasped_object(
+pub(crate) fn grasped_object(
     objects: &[SceneObject],
     ee: &[Pose],
     grasp: usize,
@@ -164,7 +164,7 @@ pub fn grasped_object(
 
 /// The object nearest the tool centre point at frame `k`; movable objects are preferred when
 /// the world says which are.
-pub fn nearest_to_tool(objects: &[SceneObject], ee: &[Pose], k: usize) -> Option<usize> {
+pub(crate) fn nearest_to_tool(objects: &[SceneObject], ee: &[Pose], k: usize) -> Option<usize> {
     let tool = ee[k].translation.vector;
     let nearest = |movable_only: bool| {
         objects
@@ -180,7 +180,11 @@ pub fn nearest_to_tool(objects: &[SceneObject], ee: &[Pose], k: usize) -> Option
 
 /// The object that receives `held` at frame `release`: the one it ends on or in (index into
 /// `objects`; see the module docs).
-pub fn receiving_object(objects: &[SceneObject], held: usize, release: usize) -> Option<usize> {
+pub(crate) fn receiving_object(
+    objects: &[SceneObject],
+    held: usize,
+    release: usize,
+) -> Option<usize> {
     let h = &objects[held];
     let centre = h.centre(release);
     let by_shape = h.shape.as_ref().and_then(|shape| {
@@ -380,9 +384,7 @@ mod tests {
                         let truth = world.support_under(&cube, &resting, "cube");
                         let crowded = world.objects.iter().any(|o| {
                             o.name != support.name
-                                && akl_scene::shapes_overlap(
-                                    &cube, &resting, &o.shape, &o.pose,
-                                )
+                                && akl_scene::shapes_overlap(&cube, &resting, &o.shape, &o.pose)
                         });
                         if truth.map(|t| t.name.as_str()) != Some(&support.name) || crowded {
                             continue;

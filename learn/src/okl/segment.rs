@@ -11,7 +11,7 @@ use std::ops::RangeInclusive;
 /// command that opens it and ends at the frame of the command that closes it, so neighbouring
 /// segments share that frame and a constraint may end exactly at an interaction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Segment {
+pub(crate) struct Segment {
     /// First frame (0 or the frame of a gripper change).
     pub start: usize,
     /// Last frame (the next gripper change, or the last frame).
@@ -22,20 +22,20 @@ pub struct Segment {
 
 impl Segment {
     /// The frames of the segment.
-    pub fn frames(&self) -> RangeInclusive<usize> {
+    pub(crate) fn frames(&self) -> RangeInclusive<usize> {
         self.start..=self.end
     }
 }
 
 /// Frames at which the gripper state differs from the frame before: the gripper commands.
-pub fn gripper_changes(gripper: &[Gripper]) -> Vec<usize> {
+pub(crate) fn gripper_changes(gripper: &[Gripper]) -> Vec<usize> {
     (1..gripper.len())
         .filter(|&k| gripper[k] != gripper[k - 1])
         .collect()
 }
 
 /// Splits frames `0..n` at the gripper changes (line 2). Empty for an empty demo.
-pub fn segment_trajectory(gripper: &[Gripper]) -> Vec<Segment> {
+pub(crate) fn segment_trajectory(gripper: &[Gripper]) -> Vec<Segment> {
     let n = gripper.len();
     if n == 0 {
         return Vec::new();
@@ -77,7 +77,7 @@ pub fn runs(states: &[bool]) -> Vec<RangeInclusive<usize>> {
 /// The answer given to the query a detected run raised: the first answer at or after the run's
 /// first frame and before the next run starts (`None` when the teacher gave none). `events`
 /// are in time order.
-pub fn answer_for(
+pub(crate) fn answer_for(
     run: &RangeInclusive<usize>,
     next_run_start: Option<usize>,
     events: &[DialogueEvent],
@@ -96,7 +96,7 @@ pub fn answer_for(
 /// those the teacher answered "no" (answers "yes", "I don't know" and no answer keep a run).
 ///
 /// One pass over the runs and the (time-ordered) events together.
-pub fn modify_detected_constraints(
+pub(crate) fn modify_detected_constraints(
     detector: &[bool],
     events: &[DialogueEvent],
 ) -> Vec<RangeInclusive<usize>> {
@@ -117,7 +117,7 @@ pub fn modify_detected_constraints(
 ///
 /// `kept` is in frame order (as [`modify_detected_constraints`] returns it), so the runs that
 /// can reach into the segment are found by bisection.
-pub fn constrained_regions(
+pub(crate) fn constrained_regions(
     segment: &Segment,
     kept: &[RangeInclusive<usize>],
 ) -> Vec<RangeInclusive<usize>> {

@@ -11,14 +11,14 @@ use super::profile::{TeacherError, TeacherProfile};
 use crate::demo::{Demo, DemoHeader};
 
 /// Length of the calibration line (m): ten filtered points' worth of errors at D_F = 5 cm.
-pub const LINE_LENGTH: f64 = 0.6;
+pub(super) const LINE_LENGTH: f64 = 0.6;
 /// Radius of the calibration circle (m). The circle stands for free motion, so it should bend
 /// about as much as a relaxed reach does: with 0.3 m the fitted boundary between the classes
 /// sits near 5 mm of eq. 3.2 error, between the line's noise (1–2 mm) and the free reaches of
 /// the default teacher (about 8 mm). A 0.12 m circle put the boundary near 11 mm and made
 /// every free reach look straight; see [`crate::calibration::DISSIPATION_FRACTION`] for the
 /// survey behind both choices.
-pub const CIRCLE_RADIUS: f64 = 0.3;
+pub(super) const CIRCLE_RADIUS: f64 = 0.3;
 
 /// Where the calibration movements are made: in front of the robot, at table height + 30 cm.
 const CENTRE: [f64; 3] = [0.45, 0.0, 0.3];

@@ -10,9 +10,7 @@ mod motion;
 mod profile;
 mod simulate;
 
-pub use calibration_moves::{
-    calibration_demos, calibration_demos_with, CIRCLE_RADIUS, LINE_LENGTH,
-};
-pub use motion::{min_jerk, Noise};
+pub use calibration_moves::{calibration_demos, calibration_demos_with};
+pub use motion::Noise;
 pub use profile::{KeyframeHabit, TeacherError, TeacherProfile};
 pub use simulate::{demonstrate, SimulatedDemo, SimulatedTeacher};

@@ -6,7 +6,7 @@ use rand_distr_free::gaussian;
 
 /// The minimum-jerk progress s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ of a point-to-point reach (Flash & Hogan
 /// 1985): how far along its path a hand is at normalized time τ ∈ [0, 1].
-pub fn min_jerk(tau: f64) -> f64 {
+pub(super) fn min_jerk(tau: f64) -> f64 {
     let t = tau.clamp(0.0, 1.0);
     t * t * t * (10.0 + t * (-15.0 + 6.0 * t))
 }
