@@ -102,6 +102,8 @@ struct Info {
     open_width: f64,
     hand_links: Vec<String>,
     margins: akl_planner::config::CollisionConfig,
+    /// Where the robot stands in the task's robot base frame (`None`: at the robot base).
+    mount: Option<akl_planner::config::MountConfig>,
     links: Vec<LinkInfo>,
 }
 
@@ -143,6 +145,7 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
             .map(|&i| links[i].name.clone())
             .collect(),
         margins: c.collision.clone(),
+        mount: c.mount,
         links: links
             .iter()
             .enumerate()
@@ -213,6 +216,13 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         "margins: arm {} m, hand {} m, held object {} m, between links {} m",
         m.arm_margin, m.hand_margin, m.held_margin, m.self_margin
     );
+    match &summary.mount {
+        Some(at) => println!(
+            "mount: xyz {:?} m, rpy {:?} rad in the task's robot base frame",
+            at.xyz, at.rpy
+        ),
+        None => println!("mount: at the task's robot base"),
+    }
     println!();
     let mut shapes = Table::new([
         "link",

@@ -65,7 +65,7 @@ pub(super) fn opening(urdf: &urdf_rs::Robot, s: &Structure) -> (f64, f64) {
     }
 }
 
-/// The TCP of `robot` (loaded with its palm as TCP): between the fingertip pads half open, z
+/// The TCP of `robot` (loaded with its palm as TCP): between the fingertip pads closed, z
 /// pointing from the fingers' mounts towards the pads, y along the closing axis. An existing
 /// link fixed to the palm within 5 mm and 5° of it is taken; otherwise a link `akl_tcp` is
 /// added.
@@ -76,15 +76,20 @@ pub(super) fn guess_tcp(robot: &Robot, s: &Structure) -> TcpGuess {
     let in_palm = |i: usize| poses[palm].inverse() * poses[i];
     let (centre, approach, closing, note) = match (s.gripper, HandModel::build(robot)) {
         (GripperKind::Parallel | GripperKind::Linkage, Ok(hand)) => {
-            // The pads half open: a linkage's pads travel along the approach as it closes (the
-            // 2F-85's by 13.5 mm), and there they are within half that travel of wherever
-            // they close on something; prismatic fingers' pads stay at one height.
-            let half_open = robot.link_poses(robot.ready(), 0.5 * robot.open_width());
-            let [a, b] = hand.fingers.map(|f| {
-                (half_open[palm].inverse() * half_open[f.link])
-                    .transform_point(&Point3::from(f.face_centre()))
-                    .coords
-            });
+            // The pads closed, where they meet: a linkage's pads travel along the approach as
+            // it closes (the 2F-85's by 13.4 mm, furthest from the palm closed), so at any
+            // opening they close on something at or above this point, never deeper than the
+            // spec puts the TCP; prismatic fingers' pads stay at one height.
+            // The closing axis is taken open, where the pads are apart.
+            let face = |poses: &[Pose]| {
+                hand.fingers.map(|f| {
+                    (poses[palm].inverse() * poses[f.link])
+                        .transform_point(&Point3::from(f.face_centre()))
+                        .coords
+                })
+            };
+            let [a, b] = face(&poses);
+            let [ca, cb] = face(&robot.link_poses(robot.ready(), 0.0));
             // Prismatic fingers hang from the palm: their joints are the mounts. A linkage's
             // tips hang from knuckles: the approach is from the palm's origin.
             let mount = match s.gripper {
@@ -94,7 +99,7 @@ pub(super) fn guess_tcp(robot: &Robot, s: &Structure) -> TcpGuess {
                 }
                 _ => Vector3::zeros(),
             };
-            let centre = 0.5 * (a + b);
+            let centre = 0.5 * (ca + cb);
             (centre, centre - mount, a - b, None)
         }
         (GripperKind::Linkage | GripperKind::Parallel, _) => {
