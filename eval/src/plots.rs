@@ -34,7 +34,7 @@ const TASK_COLOURS: [RGBColor; 3] = [
 const LOG_FLOOR: f64 = 1e-7;
 
 /// One figure: its file name, title, axis label and the value of a trial.
-pub struct Figure {
+pub(crate) struct Figure {
     /// File name, e.g. `keyframes.svg`.
     pub file: &'static str,
     /// Title.
@@ -48,7 +48,7 @@ pub struct Figure {
 }
 
 /// The four figures of the study.
-pub const FIGURES: [Figure; 4] = [
+pub(crate) const FIGURES: [Figure; 4] = [
     Figure {
         file: "keyframes.svg",
         title: "Missed + incorrect keyframes per trial (cf. thesis Fig. 4-2b)",
@@ -80,7 +80,11 @@ pub const FIGURES: [Figure; 4] = [
 ];
 
 /// Draws `figure` over `trials` (tasks coloured in the order of `tasks`) as an SVG document.
-pub fn draw(figure: &Figure, trials: &[Trial], tasks: &[String]) -> Result<String, PlotError> {
+pub(crate) fn draw(
+    figure: &Figure,
+    trials: &[Trial],
+    tasks: &[String],
+) -> Result<String, PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError {
         figure: figure.file.into(),
         message: e.to_string(),

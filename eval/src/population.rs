@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 
 /// The method orders of the study's Latin square (thesis §4.4): participant i takes row
 /// i mod 3, so each method is taught first, second and third equally often.
-pub const LATIN_SQUARE: [[Method; 3]; 3] = [
+pub(crate) const LATIN_SQUARE: [[Method; 3]; 3] = [
     [Method::Akl, Method::Kd, Method::Macl],
     [Method::Kd, Method::Macl, Method::Akl],
     [Method::Macl, Method::Akl, Method::Kd],

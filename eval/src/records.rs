@@ -37,7 +37,7 @@ pub enum RecordError {
 
 /// The per-trial table: one row per trial with every field of [`Trial`] but the learned spec
 /// (which the JSON holds); empty cells where a value does not apply.
-pub fn trials_csv(trials: &[Trial]) -> Result<String, RecordError> {
+pub(crate) fn trials_csv(trials: &[Trial]) -> Result<String, RecordError> {
     let encode = |message: String| RecordError::Encode {
         what: "trials.csv",
         message,
@@ -66,7 +66,7 @@ pub fn trials_csv(trials: &[Trial]) -> Result<String, RecordError> {
 
 /// The whole study and its summary, as `trials.json` holds them.
 #[derive(Serialize)]
-pub struct StudyRecord<'a> {
+pub(crate) struct StudyRecord<'a> {
     /// The tables.
     pub summary: &'a Summary,
     /// The study: population, participants, calibrations and trials with their specs.

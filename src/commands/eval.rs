@@ -5,12 +5,9 @@ use super::robot::load as load_robot;
 use crate::cli::{EvalArgs, RobotArg};
 use crate::exit::{CliError, CliResult};
 use crate::table::{seconds, Table};
-use akl_eval::plots::method_label;
-use akl_eval::records::write_records;
-use akl_eval::shards::{merge_studies, read_study};
-use akl_eval::study::{run_study, Executor, Study, StudyOptions, Trial};
-use akl_eval::summary::{
-    summarize, Summary, TABLE_ORDER, THESIS_CONSTRAINT_ERRORS, THESIS_SUCCESS,
+use akl_eval::{
+    merge_studies, method_label, read_study, run_study, summarize, write_records, Executor, Study,
+    StudyOptions, Summary, Trial, TABLE_ORDER, THESIS_CONSTRAINT_ERRORS, THESIS_SUCCESS,
 };
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::ExecOptions;
