@@ -8,7 +8,7 @@ use crate::cli::CompareArgs;
 use crate::exit::{CliError, CliResult};
 use crate::progress::Progress;
 use crate::table::Table;
-use akl_stats::interval::percent;
+use akl_stats::percent;
 use akl_stats::GateOptions;
 use akl_validate::compare::{compare, CompareOptions, Row};
 use akl_validate::ValidateOptions;

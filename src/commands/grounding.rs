@@ -9,7 +9,7 @@ use akl_exec::error::ExecError;
 use akl_exec::ExecOptions;
 use akl_planner::Robot;
 use akl_scene::Task;
-use akl_stats::interval::percent;
+use akl_stats::percent;
 use akl_tsr::{FileError, TaskSpec};
 use akl_validate::grounding::{check_groundings, GroundingOptions, Groundings, Verdict};
 use std::path::Path;

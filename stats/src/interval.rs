@@ -88,7 +88,7 @@ pub fn percent(share: f64) -> String {
 /// The largest success probability under which `successes` or more of `trials` happen with
 /// probability at most `tail`: the one-sided Clopper–Pearson lower bound (the `tail`-quantile
 /// of Beta(successes, trials − successes + 1)); 0 when there are no successes.
-pub fn clopper_pearson_lower(successes: usize, trials: usize, tail: f64) -> f64 {
+pub(crate) fn clopper_pearson_lower(successes: usize, trials: usize, tail: f64) -> f64 {
     if successes == 0 || trials == 0 {
         return 0.0;
     }
