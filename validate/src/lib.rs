@@ -9,7 +9,8 @@
 //!   demonstration it was learned from, [`answers`] reports the teacher's answers the
 //!   simulation contradicts.
 //! - [`relax`]: each keyframe's TSR widened axis by axis after a cheap screening against the
-//!   spec's own failures, and what a keyframe kept gated on fresh seeds before it is kept.
+//!   spec's own failures, and everything screening kept gated at once on fresh seeds; a gate
+//!   that fails is blamed on the keyframes whose widening, undone, passes its failed trials.
 //! - [`grounding`]: every keyframe re-grounded on every other object, judged by the same gate:
 //!   does the randomization tell the spec's reference apart?
 //! - [`compare`]: one row per spec (keyframes, lines, bits of freedom, planning, execution,
@@ -22,7 +23,7 @@
 pub mod ablation;
 pub mod answers;
 pub mod compare;
-pub mod error;
+mod error;
 pub mod grounding;
 pub mod relax;
 pub mod trials;

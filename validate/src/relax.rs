@@ -185,7 +185,9 @@ pub struct Probe {
     pub from: [f64; 2],
     /// The bounds tried.
     pub to: [f64; 2],
-    /// Screening trials run.
+    /// Screening trials run. For a rejected widening this depends on timing when several
+    /// jobs run (trials under way when the rejecting one ended still finish); whether it is
+    /// kept does not.
     pub trials: usize,
     /// Planning's collision-checking work per screening trial, as a multiple of the spec's own.
     pub effort: f64,
