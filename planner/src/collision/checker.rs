@@ -4,8 +4,9 @@
 use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed};
 use super::held::Held;
 use super::hit::Hit;
-use super::model::{Group, RobotCollision};
+use super::model::{Body, Group, RobotCollision};
 use super::scene::{Obstacle, Scene};
+use super::spheres::{gap_between, Placement};
 use super::sweep::{Proof, Sweep};
 use crate::contact_rules::Allowances;
 use crate::robot::Robot;
@@ -241,18 +242,24 @@ impl<'a> Checker<'a> {
             });
             let centres_sq = centres.norm_squared();
             if let Some(pr) = proof.as_mut() {
-                // The distance of the bounding balls first, the segments' only if it matters.
+                // The distance of the bounding balls first, the segments' only if it matters,
+                // then the balls that hold the two elements.
                 let balls_gap = centres_sq.sqrt() - balls;
                 if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
                     continue;
                 }
                 let gap = segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b).sqrt() - reach;
+                if gap > 0.0 && pr.settled(moved, self_slack + gap) {
+                    continue;
+                }
+                let gap = gap.max(self_gap(ba, pa, bb, pb));
                 if gap > 0.0 {
                     pr.limit(moved, self_slack + gap);
                     continue;
                 }
             } else if centres_sq > balls * balls
                 || segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b) > reach * reach
+                || self_gap(ba, pa, bb, pb) > 0.0
             {
                 continue;
             }
@@ -266,17 +273,52 @@ impl<'a> Checker<'a> {
                 pr.limit(moved, self_slack);
             }
         }
-        // Robot against the world.
+        // Robot against the world: bounding boxes, then the balls that hold each element,
+        // then parry. Where a ball reaches an object the exact test comes at once; where the
+        // balls keep clear but could still shorten the stretch, the exact distance is left
+        // for the end (`nearest`), when the other clearances may already have settled it.
+        let mut nearest: SmallVec<[Near; 16]> = SmallVec::new();
         for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
             let slack = 0.5 * m.world(b.group);
             let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
             let bounds = bounding_box(p, b.world_radius);
             let role = model.role(b);
-            for o in &self.scene.obstacles {
+            let mut place: Option<Placement> = None;
+            for (index, o) in self.scene.obstacles.iter().enumerate() {
+                let gap_sq = box_gap_sq(&bounds, &o.min, &o.max);
+                if gap_sq > 0.0 && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
+                    continue;
+                }
                 if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;
                 }
-                if !clear_of(&b.world_shape, p, &bounds, o, proof.as_mut(), moved, slack) {
+                let Some(pr) = proof.as_mut() else {
+                    let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                    if o.target.gap(&b.world_spheres, at) > 0.0
+                        || !parry_convert::intersects(&b.world_shape, &p.pose, &o.shape, &o.pose)
+                    {
+                        continue;
+                    }
+                    return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                };
+                if gap_sq > 0.0 && pr.settled(moved, slack + gap_sq.sqrt()) {
+                    continue;
+                }
+                let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                let gap = o.target.gap(&b.world_spheres, at).max(gap_sq.sqrt());
+                if gap > 0.0 {
+                    if !pr.settled(moved, slack + gap) {
+                        nearest.push(Near {
+                            body: k,
+                            obstacle: index,
+                            moved,
+                            slack,
+                            gap,
+                        });
+                    }
+                    continue;
+                }
+                if !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack) {
                     return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 }
             }
@@ -333,6 +375,25 @@ impl<'a> Checker<'a> {
                 if let Some(pr) = proof.as_mut() {
                     pr.limit(moved, slack);
                 }
+            }
+        }
+        if let Some(pr) = proof.as_mut() {
+            // The least promising first: once one is settled by its bound, so are the rest.
+            nearest.sort_unstable_by(|x, y| {
+                ((x.slack + x.gap) * y.moved).total_cmp(&((y.slack + y.gap) * x.moved))
+            });
+            for n in &nearest {
+                if pr.settled(n.moved, n.slack + n.gap) {
+                    break;
+                }
+                let (b, p, o) = (
+                    &bodies[n.body],
+                    &placed_bodies[n.body],
+                    &self.scene.obstacles[n.obstacle],
+                );
+                let exact = parry_convert::distance(&b.world_shape, &p.pose, &o.shape, &o.pose)
+                    .map_or(0.0, |d| d - DISTANCE_TOLERANCE);
+                pr.limit(n.moved, n.slack + exact.max(n.gap));
             }
         }
         Ok(proof.map_or(1.0, |pr| pr.fraction))
@@ -396,6 +457,27 @@ impl<'a> Checker<'a> {
         }
         None
     }
+}
+
+/// A clearance between an element and an object that its balls bound from below by `gap`,
+/// whose exact distance may prove less of the stretch than the other clearances.
+struct Near {
+    body: usize,
+    obstacle: usize,
+    moved: f64,
+    slack: f64,
+    gap: f64,
+}
+
+/// A lower bound on the distance between two elements grown by half the self margin, from
+/// their balls.
+fn self_gap(a: &Body, pa: &Placed, b: &Body, pb: &Placed) -> f64 {
+    gap_between(
+        &a.self_spheres,
+        &Placement::of(&pa.pose),
+        &b.self_spheres,
+        &Placement::of(&pb.pose),
+    )
 }
 
 /// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is

@@ -15,6 +15,13 @@
 //! [`Checker::sweep_bound`]: turning joint j by Δ moves a point at distance r from its axis by
 //! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
 //! joints beyond j move the point.
+//!
+//! Exact (parry) queries are asked only where cheaper bounds cannot settle a pair: bounding
+//! boxes, segments, and balls that hold each element (`spheres`, property-tested never to
+//! exceed the exact distance). Where an element's balls keep clear of an object but the pair
+//! could still shorten the stretch, its exact distance is deferred to the end of the check and
+//! taken for the pairs that limit the stretch most first, until the rest are settled by their
+//! bounds: against the world, the stretch proved is the one every exact distance would prove.
 
 mod checker;
 mod cull;
@@ -23,6 +30,7 @@ mod hit;
 mod model;
 mod report;
 mod scene;
+mod spheres;
 mod sweep;
 #[cfg(test)]
 mod tests;

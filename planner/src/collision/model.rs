@@ -1,6 +1,7 @@
 //! The robot's collision model: its bodies (collision elements grown by their margins),
 //! the joints that move each, and which pairs are checked against each other.
 
+use super::spheres::Spheres;
 use crate::contact_rules::LinkRole;
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
@@ -10,6 +11,11 @@ use crate::robot::Robot;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
+
+/// Thickest slab an element is cut into for the balls that hold it (metres): two or three
+/// balls per arm link. Thinner slabs (0.03–0.08 m) bound tighter but cost more than they save
+/// (BENCHMARKS.md, "Cheaper probes").
+const SLAB: f64 = 0.12;
 
 /// Which margin a link's shapes get.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,6 +44,10 @@ pub(super) struct Body {
     pub(super) core_radius: f64,
     pub(super) world_radius: f64,
     pub(super) self_radius: f64,
+    /// Balls (in the frame of `local`) whose union holds the element grown by the group's
+    /// margin, and by half the self margin ([`super::spheres`]).
+    pub(super) world_spheres: Spheres,
+    pub(super) self_spheres: Spheres,
 }
 
 /// A joint that moves a collision element when the arm moves: the link it turns or slides,
@@ -173,6 +183,7 @@ impl RobotCollision {
                 Geometry::RoundHull(hull) => (hull.half_length, hull.radius),
                 other => (0.0, other.bounding_radius()),
             };
+            let spheres = Spheres::of_geometry(&geometry, SLAB);
             bodies.push(Body {
                 link: i,
                 group,
@@ -183,6 +194,8 @@ impl RobotCollision {
                 core_radius: core,
                 world_radius: core + margin,
                 self_radius: core + 0.5 * margins.self_,
+                world_spheres: spheres.grown(margin),
+                self_spheres: spheres.grown(0.5 * margins.self_),
             });
         }
         let allowed = |a: usize, b: usize| {

@@ -1,5 +1,6 @@
 //! The world as the checks see it: its objects, grown where the rules say, and the robot's base.
 
+use super::spheres::{Placement, Solid, Target};
 use crate::parry_convert;
 use akl_scene::World;
 use akl_tsr::nalgebra::Vector3;
@@ -14,6 +15,8 @@ pub(super) struct Obstacle {
     pub(super) pose: Pose,
     pub(super) min: Vector3<f64>,
     pub(super) max: Vector3<f64>,
+    /// The object for closed-form distances from points.
+    pub(super) target: Target,
 }
 
 /// The world as the checker sees it: exact object shapes with bounding boxes, the robot's
@@ -43,6 +46,12 @@ impl Scene {
                 pose: o.pose * fix,
                 min: c - h,
                 max: c + h,
+                target: Target {
+                    solid: Solid::of(&o.shape),
+                    inverse: Placement::of(&o.pose.inverse()),
+                    min: c - h,
+                    max: c + h,
+                },
             });
         }
         let base = world.robot_base;
