@@ -122,7 +122,7 @@ pub struct Participant {
     pub experienced: bool,
     /// The participant's habits when the study starts.
     pub profile: TeacherProfile,
-    /// The order the participant uses the methods in (a row of [`LATIN_SQUARE`]).
+    /// The order the participant uses the methods in (a row of the 3×3 Latin square of the methods).
     pub order: [Method; 3],
     /// Seed of everything the participant does.
     pub seed: u64,

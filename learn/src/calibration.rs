@@ -15,7 +15,7 @@ use crate::detector::Straightness;
 /// window ([`Sampling`]); a version 1 file was fitted to the 5 cm signal and means nothing to it.
 pub const CALIBRATION_VERSION: u32 = 2;
 
-/// How the detector samples the path (see [`crate::detector`]): its distance filter step D_F
+/// How the detector samples the path (see [`Detector`](crate::Detector)): its distance filter step D_F
 /// and the window of eq. 3.2.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sampling {
@@ -62,7 +62,7 @@ pub const SAMPLING: Sampling = Sampling {
 /// Consecutive confidently straight distance errors needed to switch: 2, one filter step apart.
 /// With 3 the first-time teacher's free reaches drew no query but 10 cm descents were asked
 /// about in only 7 of 10 seeds (the survey of [`SAMPLING`]).
-pub(crate) const SWITCH_POINTS: f64 = 2.0;
+pub const SWITCH_POINTS: f64 = 2.0;
 
 /// Where T_d sits between the mean squared switching probability on unconstrained motion and on
 /// constrained motion: halfway, so that the tank fills only while most errors look straight.
@@ -73,7 +73,7 @@ pub(crate) const SWITCH_POINTS: f64 = 2.0;
 /// 130 unintended lines were asked about in each case; with a 0.12 m circle there were 124 to
 /// 300 whatever the fraction. 0.5 is the fraction with a symmetric meaning; at the finer
 /// sampling it leaves no query on the default teacher's curves (the survey of [`SAMPLING`]).
-pub(crate) const DISSIPATION_FRACTION: f64 = 0.5;
+pub const DISSIPATION_FRACTION: f64 = 0.5;
 
 /// How the energy tank's T_d and T_s follow from the fitted model (the thesis infers them from
 /// calibration without saying how; see [`Calibration::fit`]).

@@ -24,7 +24,7 @@ pub struct DemoHeader {
     /// Calibration the online detector used, if any (as recorded, e.g. a file name or `default`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calibration: Option<String>,
-    /// Shapes of tracked objects, by name, as a task file writes them (see [`crate::shapes`]):
+    /// Shapes of tracked objects, by name, as a task file writes them (see [`read_shapes_file`](crate::read_shapes_file)):
     /// with them a release is grounded by the task world's support rule when no task world is
     /// given. Empty when the recording declares none.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]

@@ -10,11 +10,10 @@ use thiserror::Error;
 use crate::demo::Answer;
 
 /// The query posed on every 0→1 switch of the detector.
-pub(crate) const QUERY: &str = "Do I have to move in a straight line there?";
+pub const QUERY: &str = "Do I have to move in a straight line there?";
 
 /// The suggestion shown after "no" or "I don't know".
-pub(crate) const SUGGESTION: &str =
-    "Please do not move in a line unless the robot must move in a line.";
+pub const SUGGESTION: &str = "Please do not move in a line unless the robot must move in a line.";
 
 /// A query grounded in the scene: where the detected line is and what is near it.
 #[derive(Debug, Clone, PartialEq)]
@@ -197,7 +196,7 @@ pub(crate) fn parse_answer(word: &str) -> Option<Answer> {
 /// hand has made enough of it, so a list written from one run's questions (which `akl teach`
 /// prints and records) fits a replay of the same recording, while questions a second apart
 /// are not confused.
-pub(crate) const ANSWER_TIME_TOLERANCE: f64 = 0.5;
+pub const ANSWER_TIME_TOLERANCE: f64 = 0.5;
 
 /// Answers given in advance (`--answers`): in order (`yes,no,unknown`), or keyed by the time of
 /// the question each answers (`9.9:yes,19.0:no`, each taken by the question nearest its time

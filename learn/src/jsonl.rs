@@ -2,7 +2,7 @@
 //!
 //! Any robot driver can write it. The header line is
 //! `{"akl_demo": 1, "task": "...", "frame": "world"}`, optionally with `"shapes": {NAME: SHAPE}`
-//! declaring tracked objects' shapes as a task file writes them (see [`crate::shapes`]). A
+//! declaring tracked objects' shapes as a task file writes them (see [`crate::read_shapes_file`]). A
 //! frame line is
 //! `{"t": 0.01, "ee": POSE, "gripper": "open", "objects": {"part": POSE}}`, optionally with
 //! `"constrained": true|false` (the online detector's state, written by `akl teach`); an event line

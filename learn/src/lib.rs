@@ -39,7 +39,7 @@ pub use demo_error::DemoError;
 pub use detector::Detector;
 pub use jsonl::{read_jsonl, write_jsonl};
 pub use live::{LiveEnd, LiveError, LiveStart, LiveStream};
-pub use mcap_io::read_mcap;
+pub use mcap_io::{read_mcap, Truncation};
 pub use measures::{score, Scores, Tolerance};
 pub use method::{
     learn_spec, needs_replay, prepare, recorded_answers, without_dialogue, LearnOptions, Method,

@@ -9,7 +9,7 @@ use akl_tsr::Pose;
 pub(crate) const CONTACT_TOLERANCE: f64 = 1e-3;
 
 /// Whether the oriented bounding boxes of two shapes interpenetrate by more than
-/// [`CONTACT_TOLERANCE`].
+/// 1 mm, so that an object resting on its support is not an overlap.
 ///
 /// Bounding boxes are exact for boxes and conservative for cylinders and spheres, which is
 /// the safe side for placing objects apart.

@@ -129,7 +129,7 @@ impl Tsr {
         weighted_norm(&self.displacement(pose))
     }
 
-    /// Whether `pose` lies in the region (up to [`BOUND_SLACK`] of round-off).
+    /// Whether `pose` lies in the region (up to 1e-9 of round-off).
     pub fn contains(&self, pose: &Pose) -> bool {
         self.displacement(pose).iter().all(|v| *v == 0.0)
     }

@@ -6,7 +6,7 @@
 //!   keyframes — line fits over the whole trajectory, total variation denoising, a fixed
 //!   threshold; constraint and interaction keyframes are never combined.
 //!
-//! Both ground their keyframes exactly as OKL does ([`crate::okl::ground`]), so the three
+//! Both ground their keyframes exactly as OKL does (`okl::ground`), so the three
 //! methods differ only in which frames they pick and what they say about them.
 
 pub mod kd;

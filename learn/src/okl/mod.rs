@@ -1,17 +1,16 @@
 //! Offline keyframe learning, OKL (thesis §3.3.2, Algorithm 1).
 //!
-//! Each step of Algorithm 1 is its own function: [`segment::segment_trajectory`] (line 2),
-//! [`segment::modify_detected_constraints`] (3), [`segment::constrained_regions`] (5),
-//! [`line::true_line`] (7), [`line::fit_line`] (8), [`line::fitting_errors`] (9),
-//! [`crate::tvd::denoise`] (10), [`constraint::threshold`] (11),
-//! [`constraint::constraint_boundaries`] (12), [`keyframes::interaction_keyframes`] (15) and
-//! [`keyframes::combine`] (16), then [`reference`] grounds every keyframe on its key object
-//! and [`pass_over`] a line's pure constraint keyframes on the fixed object under the line.
+//! Each step of Algorithm 1 is its own function: `segment_trajectory` (line 2),
+//! `modify_detected_constraints` (3), `constrained_regions` (5), `true_line` (7), [`fit_line`]
+//! (8), [`fitting_errors`] (9), [`denoise`] (10), `threshold` (11), `constraint_boundaries`
+//! (12), `interaction_keyframes` (15) and `combine` (16), then `reference` grounds every
+//! keyframe on its key object and `pass_over` a line's pure constraint keyframes on the fixed
+//! object under the line.
 //!
 //! Cost: every step is one pass over its frames; the fitting errors of a segment are computed
 //! once per constrained region in it, so the whole is linear in the number of frames for a
 //! bounded number of detected regions per segment — except the TV denoising of those errors,
-//! linear in practice but quadratic on adversarial signals (see [`crate::tvd`]).
+//! linear in practice but quadratic on adversarial signals (see [`denoise`]).
 
 pub(crate) mod constraint;
 pub(crate) mod keyframes;
@@ -108,7 +107,7 @@ pub struct OklParams {
     /// The thesis gives λ = 0.6 (§4.4) without the unit of the signal it smooths, and uses the
     /// same 0.6 for its mACL baseline's unitless inlier ratio (after Liu et al.), so the number
     /// does not carry over as is. Here the fitting error is in metres and λ weighs the plain
-    /// sum of jumps (see [`crate::tvd`]): a plateau of m frames moves at most λ/m, so 0.002
+    /// sum of jumps (see [`denoise`]): a plateau of m frames moves at most λ/m, so 0.002
     /// lets a 100-frame (1 s) plateau move 0.02 mm. Read with the error in millimetres, the
     /// thesis's 0.6 would be 0.0006 here; in centimetres, 0.006; in metres, 0.6. Measured with
     /// `cargo test --release -p akl-learn --test fidelity tvd_lambda_survey -- --ignored
@@ -164,7 +163,7 @@ impl OklParams {
 /// How far a detection runs on past the end of its line with `calibration`: the window and the
 /// errors the tank needs to switch back off, one filter step each (5 cm with the shipped
 /// calibration).
-pub(crate) fn overshoot(calibration: &Calibration) -> f64 {
+pub fn overshoot(calibration: &Calibration) -> f64 {
     calibration.filter_distance * f64::from(calibration.window + calibration.switch_points())
 }
 
@@ -173,7 +172,7 @@ pub(crate) fn overshoot(calibration: &Calibration) -> f64 {
 /// further one a filter step, less one step for where the filter's steps fall on the line.
 ///
 /// [`Sampling::span`]: crate::calibration::Sampling::span
-pub(crate) fn lead(calibration: &Calibration) -> f64 {
+pub fn lead(calibration: &Calibration) -> f64 {
     let steps = 2 * calibration.window + calibration.switch_points();
     calibration.filter_distance * f64::from(steps.saturating_sub(2))
 }
