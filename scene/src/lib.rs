@@ -28,7 +28,7 @@ mod range;
 mod reach;
 mod shape;
 mod task;
-pub mod world;
+mod world;
 
 pub use error::{SceneError, ShapeError};
 pub use file::load_obstacles;

@@ -18,7 +18,7 @@ mod keyframe;
 pub mod pose;
 pub mod rpy;
 mod spec;
-pub mod tsr;
+mod tsr;
 
 pub use error::{describe_json_error, BoundsError, FileError, PoseError, SpecError};
 pub use keyframe::{Constraint, Gripper, Keyframe, KeyframeKind};

@@ -4,7 +4,7 @@
 
 use akl_scene::{Object, Shape, World};
 use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion};
-use akl_tsr::pose::pose_from_xyz_rpy;
+use akl_tsr::pose::{pose_from_xyz_rpy, QUATERNION_NORM_TOLERANCE};
 use akl_tsr::Pose;
 use serde::Deserialize;
 use std::collections::{BTreeMap, HashSet};
@@ -14,9 +14,6 @@ use std::path::{Path, PathBuf};
 /// MotionBenchMaker file's agree to 5e-8 rad; anything beyond 1e-5 rad is a file whose two
 /// rotations say different things.
 const ROTATION_AGREEMENT: f64 = 1e-5;
-
-/// How far from unit length a quaternion may be before it is refused rather than normalized.
-const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
 
 /// A problem set: scenes by name and the problems posed in them.
 #[derive(Debug, Clone, Deserialize)]

@@ -58,7 +58,7 @@ impl Scene {
         let origin = base.translation.vector;
         let mount = obstacles.iter().position(|o| {
             let inside = |i: usize| origin[i] >= o.min[i] - 1e-9 && origin[i] <= o.max[i] + 1e-9;
-            inside(0) && inside(1) && (o.max.z - origin.z).abs() <= akl_scene::world::SUPPORT_GAP
+            inside(0) && inside(1) && (o.max.z - origin.z).abs() <= akl_scene::SUPPORT_GAP
         });
         Scene {
             obstacles,

@@ -165,7 +165,7 @@ mod tests {
     use super::*;
     use akl_scene::World;
     use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
-    use akl_tsr::tsr::Bounds;
+    use akl_tsr::Bounds;
     use akl_tsr::Pose;
     use proptest::prelude::*;
     use rand::SeedableRng;
