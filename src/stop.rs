@@ -5,11 +5,11 @@
 //!
 //! A command that runs trials passes [`interrupt`] down in its execution options
 //! (`akl_exec::ExecOptions::interrupt`): every batch run with them then stops starting
-//! trials once the flag is up (see `akl_exec::interrupt`). It reports what finished and exits
+//! trials once the flag is up (see `akl_exec::Interrupt`). It reports what finished and exits
 //! with [`crate::exit::INTERRUPTED`] ([`crate::exit::CliError::interrupted`]).
 
 use crate::exit::INTERRUPTED;
-use akl_exec::interrupt::Interrupt;
+use akl_exec::Interrupt;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Raised by the first SIGINT or SIGTERM.

@@ -6,8 +6,7 @@
 //! is what simulating and verifying cost. Trials per second per core = 1 / time per trial.
 //! Run with `cargo bench -p akl-exec --bench trials`.
 
-use akl_exec::trial::{run_trial, trial_world};
-use akl_exec::{ExecOptions, Setup};
+use akl_exec::{run_trial, trial_world, ExecOptions, Setup};
 use akl_planner::{plan_task, PlanOptions, Robot};
 use akl_scene::builtin;
 use criterion::{black_box, Criterion};

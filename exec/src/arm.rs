@@ -33,20 +33,20 @@ use rapier3d::prelude::{
 };
 
 /// Friction of the finger pads and links (rubber-like pads).
-pub const LINK_FRICTION: f64 = 1.0;
+pub(crate) const LINK_FRICTION: f64 = 1.0;
 
 /// Continuous grasping force of the Franka Hand (N).
-pub const FRANKA_HAND_FORCE: f64 = 70.0;
+pub(crate) const FRANKA_HAND_FORCE: f64 = 70.0;
 
 /// Largest force the Franka Hand can exert (N), briefly.
-pub const FRANKA_HAND_MAX_FORCE: f64 = 140.0;
+pub(crate) const FRANKA_HAND_MAX_FORCE: f64 = 140.0;
 
 /// Largest gap (metres) between a pad and an object for the pad to touch it.
-pub const PAD_CONTACT: f64 = 5e-4;
+pub(crate) const PAD_CONTACT: f64 = 5e-4;
 
 /// What one pad touches: the nearest object, how far it is, and how hard the pad pushes.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PadReading {
+pub(crate) struct PadReading {
     /// The nearest object (index), among those within rapier's contact prediction of the pad.
     pub object: Option<usize>,
     /// Its distance from the pad, from the exact shapes at their current poses (metres;
@@ -58,14 +58,14 @@ pub struct PadReading {
 
 impl PadReading {
     /// A pad with nothing near it.
-    pub const NOTHING: PadReading = PadReading {
+    pub(crate) const NOTHING: PadReading = PadReading {
         object: None,
         gap: f64::INFINITY,
         force: 0.0,
     };
 
     /// Whether the pad touches its nearest object ([`PAD_CONTACT`]).
-    pub fn touches(&self) -> bool {
+    pub(crate) fn touches(&self) -> bool {
         self.object.is_some() && self.gap <= PAD_CONTACT
     }
 }
@@ -128,7 +128,7 @@ impl Drives {
 
 /// What the fingers are told to do.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum FingerCommand {
+pub(crate) enum FingerCommand {
     /// Move to this opening (metres) and hold it.
     Width(f64),
     /// Close until both pads touch something, then hold.
@@ -205,10 +205,10 @@ fn closing_step(pads: &[PadReading; 2], pad_step: f64) -> f64 {
 
 /// Share of the closing speed at which a pad that touches pushes the object towards the other:
 /// half, so the object slides to the middle instead of being knocked over.
-pub const PUSH_SHARE: f64 = 0.5;
+pub(crate) const PUSH_SHARE: f64 = 0.5;
 
 /// The simulated arm and gripper.
-pub struct SimArm {
+pub(crate) struct SimArm {
     base: Pose,
     /// Rapier body of each robot link that has collision geometry, by link index.
     bodies: Vec<Option<RigidBodyHandle>>,
@@ -237,13 +237,13 @@ pub struct SimArm {
 impl SimArm {
     /// Moves the fingers at `scale` (in (0, 1]) of the gripper's speed, as a plan timed with
     /// that speed scale expects ([`akl_planner::PlanOptions::speed_scale`]).
-    pub fn scale_finger_speed(&mut self, scale: f64) {
+    pub(crate) fn scale_finger_speed(&mut self, scale: f64) {
         self.finger_speed *= scale;
     }
 
     /// Adds `robot`, its base at `base`, to `sim` at configuration `q` with the fingers opened
     /// `width`; `None` when the robot has no two-finger gripper the simulation can model.
-    pub fn new(
+    pub(crate) fn new(
         sim: &mut SimWorld,
         robot: &Robot,
         base: Pose,
@@ -358,7 +358,7 @@ impl SimArm {
     /// and the fingers towards their command, then sets the link bodies' targets for the
     /// coming physics step. `pads` say what each pad touches: a closing hand never moves a pad
     /// past an object in one step, and stops when both pads touch.
-    pub fn advance(
+    pub(crate) fn advance(
         &mut self,
         sim: &mut SimWorld,
         robot: &Robot,
@@ -414,36 +414,31 @@ impl SimArm {
     }
 
     /// Whether a closing hand has closed: both pads touch what is between them.
-    pub fn closed(&self) -> bool {
+    pub(crate) fn closed(&self) -> bool {
         self.closed
     }
 
     /// Sets what the fingers do from now on.
-    pub fn command_fingers(&mut self, command: FingerCommand) {
+    pub(crate) fn command_fingers(&mut self, command: FingerCommand) {
         self.finger = command;
     }
 
     /// Whether the fingers are closing (a grasp, or an opening narrower than now): what they
     /// touch then decides how far they move.
-    pub fn closing(&self) -> bool {
+    pub(crate) fn closing(&self) -> bool {
         match self.finger {
             FingerCommand::Grasp => true,
             FingerCommand::Width(w) => w < self.width,
         }
     }
 
-    /// The fingers' current command.
-    pub fn finger_command(&self) -> FingerCommand {
-        self.finger
-    }
-
     /// World pose of every link at the simulated joint state (what the bodies are moved to).
-    pub fn link_poses(&self) -> &[Pose] {
+    pub(crate) fn link_poses(&self) -> &[Pose] {
         &self.poses
     }
 
     /// The world pose of link `link`'s body, read from the simulation.
-    pub fn body_pose(&self, sim: &SimWorld, link: usize) -> Option<Pose> {
+    pub(crate) fn body_pose(&self, sim: &SimWorld, link: usize) -> Option<Pose> {
         let body = self.bodies.get(link).copied().flatten()?;
         Some(crate::convert::from_sim(
             sim.physics.bodies[body].position(),
@@ -451,40 +446,35 @@ impl SimArm {
     }
 
     /// The simulated tool centre point, read from the hand's body in the simulation.
-    pub fn tcp(&self, sim: &SimWorld) -> Pose {
+    pub(crate) fn tcp(&self, sim: &SimWorld) -> Pose {
         let palm = self.hand.palm_link;
         let on_hand = self.poses[palm].inverse() * self.poses[self.tcp];
         self.body_pose(sim, palm).unwrap_or(self.poses[palm]) * on_hand
     }
 
     /// The simulated joint positions.
-    pub fn joint_positions(&self) -> &[f64] {
+    pub(crate) fn joint_positions(&self) -> &[f64] {
         &self.q
     }
 
     /// The simulated opening between the pads (metres).
-    pub fn width(&self) -> f64 {
+    pub(crate) fn width(&self) -> f64 {
         self.width
     }
 
     /// The hand model (pads and palm).
-    pub fn hand(&self) -> &HandModel {
+    pub(crate) fn hand(&self) -> &HandModel {
         &self.hand
     }
 
     /// The pad collider of finger `k` (in the hand model's order).
-    pub fn pad_collider(&self, k: usize) -> Option<ColliderHandle> {
+    pub(crate) fn pad_collider(&self, k: usize) -> Option<ColliderHandle> {
         self.pads.get(k).copied().flatten()
     }
 
     /// The rapier body of link `link`, if it has collision geometry.
-    pub fn body(&self, link: usize) -> Option<RigidBodyHandle> {
+    pub(crate) fn body(&self, link: usize) -> Option<RigidBodyHandle> {
         self.bodies.get(link).copied().flatten()
-    }
-
-    /// Largest acceleration of each joint (rad/s²).
-    pub fn acceleration_limits(&self) -> &[f64] {
-        &self.accel_limits
     }
 }
 

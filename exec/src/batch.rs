@@ -204,7 +204,7 @@ impl<'a> Batch<'a> {
     }
 
     /// Runs again trial `trial` of this batch, or the trial of `report` (this batch's report)
-    /// that a trace should show by default (see [`trial_to_trace`]), recording it at
+    /// that a trace should show by default (the first that failed, else the first), recording it at
     /// [`TRACE_RATE`], and writes it as an MCAP trace to `path`. Returns that trial's index.
     pub fn write_trace(
         &self,
@@ -311,7 +311,7 @@ pub fn settings(robot: &Robot, options: &ExecOptions, spec: &TaskSpec) -> Settin
 
 /// SHA-256 (hex) of the spec's canonical JSON: the same spec gives the same hash whatever its
 /// file's layout.
-pub fn spec_hash(spec: &TaskSpec) -> String {
+pub(crate) fn spec_hash(spec: &TaskSpec) -> String {
     sha256(&spec.to_json())
 }
 
@@ -330,7 +330,7 @@ pub fn trial_seed(seed: u64, i: usize) -> u64 {
 
 /// The trial a trace should show: the first that failed, else the first (`None` when the
 /// report holds no trial).
-pub fn trial_to_trace<T: TrialOutcome>(report: &BatchReport<T>) -> Option<usize> {
+pub(crate) fn trial_to_trace<T: TrialOutcome>(report: &BatchReport<T>) -> Option<usize> {
     report
         .reports
         .iter()

@@ -210,7 +210,7 @@ fn watched(a: Owner, b: Owner, held: Option<usize>) -> bool {
 }
 
 /// Steps over which a force must be kept up to count: 3 steps (12.5 ms at 240 Hz).
-pub const SUSTAIN_STEPS: usize = 3;
+pub(crate) const SUSTAIN_STEPS: usize = 3;
 
 /// The contact verdicts and extremes of one run.
 #[derive(Debug, Clone, Default)]

@@ -10,10 +10,10 @@ use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, SharedShape, Vector};
 
 /// A pose as rapier's single-precision pose (rapier's poses are parry3d's, so the planner's
 /// conversion serves both).
-pub use akl_planner::parry_convert::pose as to_sim;
+pub(crate) use akl_planner::parry_convert::pose as to_sim;
 
 /// A rapier pose as an AKL pose.
-pub fn from_sim(p: &SimPose) -> Pose {
+pub(crate) fn from_sim(p: &SimPose) -> Pose {
     let t = p.translation;
     let q = p.rotation;
     Pose::from_parts(
@@ -28,12 +28,12 @@ pub fn from_sim(p: &SimPose) -> Pose {
 }
 
 /// A rapier vector as an nalgebra vector.
-pub fn vector_from_sim(v: Vector) -> Vector3<f64> {
+pub(crate) fn vector_from_sim(v: Vector) -> Vector3<f64> {
     Vector3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
 }
 
 /// A collider for a scene object, placed at `origin` (the object frame in its body's frame).
-pub fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
+pub(crate) fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
     match *shape {
         Shape::Box { size } => ColliderBuilder::cuboid(
             0.5 * size[0] as f32,
@@ -96,7 +96,7 @@ fn mesh_object(shape: &Shape) -> SharedShape {
 }
 
 /// Sides of the prism that keeps a lying cylinder from rolling.
-pub const PRISM_SIDES: usize = 24;
+pub(crate) const PRISM_SIDES: usize = 24;
 
 /// How far (metres) the prism stops short of each end of the cylinder.
 const PRISM_INSET: f64 = 0.001;
@@ -158,7 +158,7 @@ fn prism(radius: f64, length: f64) -> Option<SharedShape> {
 }
 
 /// A collider for one collision element of a robot link, placed at `origin` in the link frame.
-pub fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuilder {
+pub(crate) fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuilder {
     match *geometry {
         Geometry::Capsule { radius, length } => {
             ColliderBuilder::capsule_z(0.5 * length as f32, radius as f32).position(to_sim(origin))

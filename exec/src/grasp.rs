@@ -34,7 +34,7 @@ use serde::Serialize;
 /// each ground truth: at 20 Hz held objects sag 3 mm in the hand (placements then press their
 /// support), at 200 Hz and stiffer a weld made while the object rests on its support fights
 /// that contact; at 60 Hz objects move at most 0.3 mm in the hand.
-pub const WELD_SOFTNESS: SpringCoefficients<f32> = SpringCoefficients {
+pub(crate) const WELD_SOFTNESS: SpringCoefficients<f32> = SpringCoefficients {
     natural_frequency: 60.0,
     damping_ratio: 1.0,
 };
@@ -61,7 +61,7 @@ impl Default for GraspLimits {
 }
 
 /// What each pad touches now.
-pub fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
+pub(crate) fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
     let mut pads = [PadReading::NOTHING; 2];
     for (k, reading) in pads.iter_mut().enumerate() {
         let Some(collider) = arm.pad_collider(k) else {
@@ -131,7 +131,7 @@ fn pad_overlap(finger: &Finger, pad_pose: &Pose, object: &Pose, half: &Vector3<f
 }
 
 /// Measures the grasp of object `object` by the simulated hand.
-pub fn measure(sim: &SimWorld, arm: &SimArm, object: usize) -> GraspMeasure {
+pub(crate) fn measure(sim: &SimWorld, arm: &SimArm, object: usize) -> GraspMeasure {
     let hand = arm.hand();
     let pose = sim.object_pose(object);
     let half = sim.template().objects[object].shape.half_extents();
@@ -181,7 +181,7 @@ impl GraspMeasure {
 /// ([`akl_planner::squeeze`], the rule the planner's held model follows): turned about the
 /// hand's approach axis until it lies flat on the pads, and a cylinder held by its side stood
 /// up between them. Returns the turn about the approach axis (radians).
-pub fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
+pub(crate) fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
     let tcp = arm.tcp(sim);
     let shape = sim.template().objects[object].shape.clone();
     let in_tcp = tcp.inverse() * sim.object_pose(object);
@@ -194,7 +194,7 @@ pub fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {
 
 /// An object welded to the hand while friction could hold it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Weld {
+pub(crate) struct Weld {
     /// Index of the object in [`SimWorld::objects`].
     pub object: usize,
     /// Its pose in the TCP frame when welded.
@@ -212,7 +212,7 @@ pub struct Weld {
 
 /// The load on a weld in one step.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WeldLoad {
+pub(crate) struct WeldLoad {
     /// Force along the pads' faces (N).
     pub force: f64,
     /// Torque about the closing axis (N·m).
@@ -221,7 +221,7 @@ pub struct WeldLoad {
 
 impl Weld {
     /// Welds object `object` to the hand of `arm` as it is now, squeezed with `grasp_force`.
-    pub fn attach(
+    pub(crate) fn attach(
         sim: &mut SimWorld,
         arm: &SimArm,
         object: usize,
@@ -270,7 +270,7 @@ impl Weld {
     }
 
     /// The load the weld carried in the last step.
-    pub fn load(&self, sim: &SimWorld) -> WeldLoad {
+    pub(crate) fn load(&self, sim: &SimWorld) -> WeldLoad {
         let Some(joint) = sim.physics.impulse_joints.get(self.joint) else {
             return WeldLoad {
                 force: 0.0,
@@ -290,13 +290,13 @@ impl Weld {
     }
 
     /// Whether `load` is more than friction could hold.
-    pub fn overloaded(&self, load: &WeldLoad) -> bool {
+    pub(crate) fn overloaded(&self, load: &WeldLoad) -> bool {
         load.force > self.force_capacity || load.torque > self.torque_capacity
     }
 
     /// The part of `load` friction could not hold, in words: a force along the pads' faces,
     /// or a torque about the closing axis.
-    pub fn overload_text(&self, load: &WeldLoad) -> String {
+    pub(crate) fn overload_text(&self, load: &WeldLoad) -> String {
         if load.force > self.force_capacity {
             format!(
                 "a force of {:.0} N along the pads, more than the {:.0} N friction holds",
@@ -311,7 +311,7 @@ impl Weld {
     }
 
     /// Removes the weld: the object is free and physics takes over.
-    pub fn release(self, sim: &mut SimWorld) {
+    pub(crate) fn release(self, sim: &mut SimWorld) {
         sim.physics.impulse_joints.remove(self.joint, true);
         for pad in self.pads {
             sim.set_unsolved(pad, self.object, false);
@@ -324,7 +324,8 @@ impl Weld {
     }
 
     /// How far (metres) the object has moved in the hand since it was welded.
-    pub fn slip(&self, sim: &SimWorld, tcp: &Pose) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn slip(&self, sim: &SimWorld, tcp: &Pose) -> f64 {
         let now = tcp.inverse() * sim.object_pose(self.object);
         (now.translation.vector - self.in_tcp.translation.vector).norm()
     }

@@ -1,4 +1,4 @@
-//! Joining reports: the shards of a run ([`crate::shard`]) merged into the report the whole
+//! Joining reports: the shards of a run ([`crate::Shard`]) merged into the report the whole
 //! run gives, and an interrupted run's report completed by the trials it lacks (`--resume`).
 //!
 //! Parts are joined only when they are parts of one run: the same [`Identity`] (engine
@@ -175,7 +175,10 @@ pub fn read(path: &Path) -> Result<StoredReport, MergeError> {
 }
 
 /// The trials of its run a report should hold: its shard's block, or all of them.
-pub fn expected_trials(path: &Path, report: &StoredReport) -> Result<Range<usize>, MergeError> {
+pub(crate) fn expected_trials(
+    path: &Path,
+    report: &StoredReport,
+) -> Result<Range<usize>, MergeError> {
     let identity = report
         .identity
         .as_ref()
@@ -189,7 +192,7 @@ pub fn expected_trials(path: &Path, report: &StoredReport) -> Result<Range<usize
 }
 
 /// The trials of its run (or shard) a report lacks, in order: what `--resume` runs.
-pub fn missing(path: &Path, report: &StoredReport) -> Result<Vec<usize>, MergeError> {
+pub(crate) fn missing(path: &Path, report: &StoredReport) -> Result<Vec<usize>, MergeError> {
     let expected = expected_trials(path, report)?;
     let have = checked_trials(path, report, &expected)?;
     Ok(expected
@@ -236,7 +239,7 @@ fn checked_trials(
 
 /// Whether `b` (file `b_path`) is of the same run as `a` (file `a_path`): the same identity,
 /// task, method, seed, randomization and settings.
-pub fn check_same_run(
+pub(crate) fn check_same_run(
     a_path: &Path,
     a: &StoredReport,
     b_path: &Path,
@@ -447,7 +450,7 @@ pub fn merge(parts: &[(PathBuf, StoredReport)]) -> Result<StoredReport, MergeErr
 }
 
 /// An interrupted report (`kept`, from `path`) completed by `more`, the run of the trials it
-/// lacked ([`missing`]): every trial in order, the totals computed again, interrupted only if
+/// lacked (those [`check_resume`] returns): every trial in order, the totals computed again, interrupted only if
 /// `more` was. `more` must be of the same run.
 pub fn resume(
     path: &Path,

@@ -44,7 +44,7 @@ pub struct ExecOptions {
     /// Samples per simulated second of the objects' paths.
     pub path_rate: f64,
     /// Raised to stop part-way (Ctrl-C): once it is, batches start no more trials (see
-    /// [`crate::interrupt`]). Never raised by default. Not a setting of the trials themselves:
+    /// [`Interrupt`]). Never raised by default. Not a setting of the trials themselves:
     /// it changes which trials run, never what one of them gives.
     pub interrupt: Interrupt,
 }

@@ -42,7 +42,7 @@ impl PoseNoise {
 
 /// The world as perceived in the trial seeded `seed`: `truth` with every movable object's pose
 /// disturbed by `noise`. Deterministic per seed; objects are drawn in the world's order.
-pub fn perceive(truth: &World, noise: &PoseNoise, seed: u64) -> World {
+pub(crate) fn perceive(truth: &World, noise: &PoseNoise, seed: u64) -> World {
     // Its own ChaCha stream: independent of the placement drawn from the same seed.
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(1);

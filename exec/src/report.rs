@@ -157,7 +157,7 @@ impl Failure {
 ///
 /// The sort is stable, so failures at the same time keep the order the checks gave them (grasp,
 /// slip, release, collision, keyframe, line, goals); failures with no time come last.
-pub fn rank(failures: &mut [Failure]) {
+pub(crate) fn rank(failures: &mut [Failure]) {
     failures.sort_by(|a, b| match (a.t, b.t) {
         (Some(x), Some(y)) => x.total_cmp(&y),
         (Some(_), None) => std::cmp::Ordering::Less,
@@ -315,7 +315,7 @@ impl TrialReport {
         causes
     }
 
-    /// The trial's root cause: its first failure, the earliest once [`rank`]ed, if it failed.
+    /// The trial's root cause: its first failure (the earliest, once ranked by time), if it failed.
     pub fn root(&self) -> Option<&Failure> {
         self.failures.first()
     }
@@ -610,7 +610,7 @@ pub struct BatchReport<T = TrialReport> {
     /// [`crate::merge`] and `--resume`); absent in reports of older builds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identity: Option<Identity>,
-    /// For each cause, how many failed trials it was the root cause of (see [`rank`]); these
+    /// For each cause, how many failed trials it was the root cause of (its earliest failure); these
     /// add up to the failed trials.
     pub failures: BTreeMap<Cause, usize>,
     /// For each cause, how many failed trials it occurred in without being their root cause.

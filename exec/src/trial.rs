@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// The cause a planning error counts under.
-pub fn plan_cause(e: &PlanError) -> Cause {
+pub(crate) fn plan_cause(e: &PlanError) -> Cause {
     match e {
         PlanError::Unreachable { .. } => Cause::Unreachable,
         PlanError::NoCollisionFreeIk { .. } => Cause::NoCollisionFreeGoal,
@@ -36,7 +36,7 @@ fn poses_of<'w>(
 
 /// Runs trial `trial` in `world` (the true placements): perceives it with the trial's
 /// `seed`, plans on what was perceived with the same seed, simulates in `world`, and judges.
-/// Its failures come in the order they occurred, the first its root cause ([`rank`]). Records
+/// Its failures come in the order they occurred, the first its root cause. Records
 /// the simulation into `timeline` when given.
 pub fn run_trial(
     setup: &Setup,

@@ -13,7 +13,7 @@ const LOOK: [f64; 4] = [0.93, 0.93, 0.95, 1.0];
 
 /// A scene update with one entity per link that has visual meshes; `None` when the robot
 /// has none (a URDF of primitives).
-pub fn robot_models(robot: &Robot) -> Option<SceneUpdate> {
+pub(crate) fn robot_models(robot: &Robot) -> Option<SceneUpdate> {
     let links = robot.links();
     let entities: Vec<SceneEntity> = (0..links.len())
         .filter_map(|i| {

@@ -12,16 +12,16 @@ use rapier3d::prelude::{
 };
 
 /// Collision group of furniture (fixed objects).
-pub const FURNITURE: Group = Group::GROUP_1;
+pub(crate) const FURNITURE: Group = Group::GROUP_1;
 /// Collision group of movable objects (held or not).
-pub const OBJECTS: Group = Group::GROUP_2;
+pub(crate) const OBJECTS: Group = Group::GROUP_2;
 /// Collision group of the robot's links; links never collide with each other in the
 /// simulation (the plan is checked for self-collision, and neighbouring links' models overlap).
-pub const ARM: Group = Group::GROUP_3;
+pub(crate) const ARM: Group = Group::GROUP_3;
 
 /// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check
 /// with `max_speed`.
-pub fn resting(linear: f64, angular: f64, max_speed: f64) -> bool {
+pub(crate) fn resting(linear: f64, angular: f64, max_speed: f64) -> bool {
     linear <= max_speed && angular <= 10.0 * max_speed
 }
 
@@ -239,7 +239,7 @@ impl SimWorld {
     }
 
     /// Moves object `i` to `pose` at once, keeping its velocity (a squeeze seating it between
-    /// the pads, see [`crate::grasp::square`]).
+    /// the pads).
     pub fn set_object_pose(&mut self, i: usize, pose: &Pose) {
         let body = self.objects[i].body;
         if let Some(b) = self.physics.bodies.get_mut(body) {

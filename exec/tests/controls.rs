@@ -2,10 +2,9 @@
 //! must reject in at least 9 of 10 randomized trials for the named cause (and so the deployment
 //! gate fails it), beside the ground truths, which must pass the same trials.
 
-use akl_exec::arm::Drives;
 use akl_exec::batch::{Batch, BatchOptions};
 use akl_exec::report::{BatchReport, Cause};
-use akl_exec::ExecOptions;
+use akl_exec::{Drives, ExecOptions};
 use akl_planner::Robot;
 use akl_scene::{builtin, Task};
 use akl_stats::{Decision, Gate, GateOptions};
@@ -296,8 +295,7 @@ fn the_assembly_without_its_line_makes_the_pipe_hit_the_clamp() {
 /// slides in the hand.
 #[test]
 fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
-    use akl_exec::simulate::simulate;
-    use akl_exec::Setup;
+    use akl_exec::{simulate, Setup};
     use akl_tsr::nalgebra::Translation3;
     let robot = Robot::panda().unwrap();
     let t = task("pick_place");
@@ -345,8 +343,7 @@ fn a_support_higher_than_perceived_is_pressed_into_in_the_simulation() {
 /// deeper or harder than a compliant insertion may, or the grasp gave way and the pipe slid
 /// in the hand), and what happened, for the message.
 fn insertion_into_a_clamp_moved_by(offset: f64) -> (bool, String) {
-    use akl_exec::simulate::simulate;
-    use akl_exec::Setup;
+    use akl_exec::{simulate, Setup};
     use akl_tsr::nalgebra::Translation3;
     let robot = Robot::panda().unwrap();
     let t = task("assembly");

@@ -4,7 +4,7 @@
 //! axis beyond the shelf's edge), so stillness is not bought with damping that would also hide
 //! a real fall.
 
-use akl_exec::world::{Physics, SimWorld};
+use akl_exec::{Physics, SimWorld};
 use akl_scene::{Object, Shape, World};
 use akl_tsr::nalgebra::{Translation3, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
@@ -156,7 +156,7 @@ fn a_cylinder_standing_over_the_shelfs_edge_falls() {
 
 /// The example task's hexagonal part (a mesh file) standing untouched at random places and
 /// turns on a shelf stays where it is put: its six-cornered base stands on all of them, not
-/// on the four parry would take along one side (see `akl_exec::convert`).
+/// on the four parry would take along one side (see `exec/src/convert.rs`).
 #[test]
 fn an_untouched_mesh_part_stays_where_it_is_put() {
     let mut part = Shape::Mesh {

@@ -245,7 +245,7 @@ pub(crate) struct ExecuteArgs {
         requires = "randomize",
         conflicts_with = "grounding_check"
     )]
-    pub shard: Option<akl_exec::shard::ShardRequest>,
+    pub shard: Option<akl_exec::ShardRequest>,
     /// Finish the interrupted run whose report is FILE: its trials are kept, the rest of the
     /// run (or of its shard) are run, and the whole report is written to --report (default:
     /// FILE). The other options must be the run's own (checked against the report's hashes).
@@ -322,7 +322,7 @@ pub(crate) struct EvalArgs {
     /// exactly as in the whole study; `auto` and `auto/N` as in `akl execute --shard`. Join the
     /// shards' trials.json with --merge.
     #[arg(long, value_name = "I/N|auto|auto/N")]
-    pub shard: Option<akl_exec::shard::ShardRequest>,
+    pub shard: Option<akl_exec::ShardRequest>,
     /// Instead of running a study, join the trials.json files of its shards (`--shard I/N
     /// --out DIR`) into the whole study: its tables, and with --out its records and figures.
     #[arg(long, value_name = "TRIALS_JSON", num_args = 1.., conflicts_with_all = ["participants", "seed", "execute", "shard"])]

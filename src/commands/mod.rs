@@ -23,8 +23,7 @@ mod validate;
 
 use crate::cli::{AnyTaskArg, Cli, Command};
 use crate::exit::{CliError, CliResult};
-use akl_exec::settle::check_settles;
-use akl_exec::world::Physics;
+use akl_exec::{check_settles, Physics};
 use akl_learn::calibration::Calibration;
 use akl_learn::teacher::TeacherProfile;
 use akl_scene::Task;
@@ -98,8 +97,9 @@ pub(crate) fn check_output(path: &Path, what: &str) -> Result<(), CliError> {
 }
 
 /// The task `name_or_path` names (a built-in name or a task file), its world checked to stand
-/// still when simulated untouched ([`akl_exec::settle`]): a scene that only the simulation
-/// shows to be wrong (an object in the air, one over an edge) is bad input naming the object.
+/// still when simulated untouched ([`akl_exec::check_settles`]): a scene that only the
+/// simulation shows to be wrong (an object in the air, one over an edge) is bad input naming the
+/// object.
 pub(crate) fn load_task(name_or_path: &str) -> Result<Task, CliError> {
     let task = akl_scene::builtin::resolve(name_or_path).map_err(CliError::input)?;
     check_settles(&task.world, &Physics::default())

@@ -4,8 +4,8 @@ use super::execute::{print_executed, Executed};
 use super::{check_output, print_json};
 use crate::cli::{MergeArgs, ReportCommand};
 use crate::exit::{CliError, CliResult};
-use akl_exec::junit::{junit, Suite};
 use akl_exec::merge;
+use akl_exec::{junit, Suite};
 use serde::Serialize;
 
 pub(super) fn run(cmd: ReportCommand) -> CliResult {

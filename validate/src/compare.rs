@@ -2,7 +2,7 @@
 //! leaves the planner (bits of freedom), what the budgeted planner makes of it, how it executes
 //! and whether it passes validation.
 //!
-//! Once the validation's [`akl_exec::interrupt::Interrupt`] is raised (Ctrl-C) no further spec
+//! Once the validation's [`akl_exec::Interrupt`] is raised (Ctrl-C) no further spec
 //! is compared; the spec under way keeps the trials it finished, without a verdict.
 
 use crate::validation::{validate, ValidateOptions, Verdict};

@@ -1,7 +1,7 @@
 //! Why a validation, relaxation or comparison could not be carried out. A spec that fails its
 //! trials is not an error: it is a verdict.
 
-use akl_exec::error::ExecError;
+use akl_exec::ExecError;
 use akl_learn::okl::LearnError;
 use akl_planner::flexibility::FlexibilityError;
 

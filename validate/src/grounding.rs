@@ -25,9 +25,8 @@
 //! after a placement is re-grounded on the placed object where it then stands.
 
 use crate::trials::run_gated;
-use akl_exec::error::ExecError;
 use akl_exec::report::Cause;
-use akl_exec::ExecOptions;
+use akl_exec::{ExecError, ExecOptions};
 use akl_planner::Robot;
 use akl_scene::Task;
 use akl_stats::{Decision, Gate, GateOptions, PassRate};
@@ -356,7 +355,7 @@ mod tests {
 
     #[test]
     fn a_check_interrupted_before_it_starts_measures_nothing() {
-        use akl_exec::interrupt::Interrupt;
+        use akl_exec::Interrupt;
         use std::sync::atomic::AtomicBool;
         static RAISED: AtomicBool = AtomicBool::new(true);
         let robot = Robot::panda().unwrap();

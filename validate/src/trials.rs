@@ -3,9 +3,8 @@
 //! ([`run_gated`]).
 
 use akl_exec::batch::{trial_seed, Batch, BatchOptions};
-use akl_exec::error::ExecError;
 use akl_exec::report::{BatchReport, Cause, TrialReport};
-use akl_exec::ExecOptions;
+use akl_exec::{ExecError, ExecOptions};
 use akl_planner::goal::GoalStrategy;
 use akl_planner::{PlanBudget, Robot};
 use akl_scene::Task;

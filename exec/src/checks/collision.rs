@@ -4,7 +4,7 @@ use crate::contacts::Collision;
 use crate::report::{Cause, Failure};
 
 /// A failure for each pair that collided, at its first offending contact.
-pub fn check(collisions: &[Collision]) -> Vec<Failure> {
+pub(crate) fn check(collisions: &[Collision]) -> Vec<Failure> {
     collisions
         .iter()
         .map(|c| {

@@ -7,7 +7,11 @@ use crate::world::resting;
 use akl_scene::{GoalCheck, Task};
 
 /// The goal checks, and a failure for each that does not hold, at the end of settling.
-pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck>, Vec<Failure>) {
+pub(crate) fn check(
+    task: &Task,
+    obs: &Observations,
+    rest_speed: f64,
+) -> (Vec<GoalCheck>, Vec<Failure>) {
     let mut goals: Vec<GoalCheck> = match &obs.settled {
         Some(world) => task.check_goals(world, &obs.paths),
         None => Vec::new(),
@@ -26,7 +30,7 @@ pub fn check(task: &Task, obs: &Observations, rest_speed: f64) -> (Vec<GoalCheck
 
 /// The rest check: every movable object slower than `max_speed` (m/s, and 10 × that in rad/s)
 /// once settled; `speeds` are (name, linear, angular) per movable object.
-pub fn rest(speeds: &[(String, f64, f64)], max_speed: f64) -> GoalCheck {
+pub(crate) fn rest(speeds: &[(String, f64, f64)], max_speed: f64) -> GoalCheck {
     let moving: Vec<String> = speeds
         .iter()
         .filter(|(_, v, w)| !resting(*v, *w, max_speed))

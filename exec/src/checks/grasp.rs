@@ -6,7 +6,7 @@ use crate::simulate::observations::GraspEvent;
 
 /// One check per closing of the gripper; a failure for each that did not hold the intended
 /// object soundly, at the time the closing ended.
-pub fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
+pub(crate) fn check(grasps: &[GraspEvent]) -> (Vec<GraspCheck>, Vec<Failure>) {
     let mut checks = Vec::with_capacity(grasps.len());
     let mut failures = Vec::new();
     for g in grasps {

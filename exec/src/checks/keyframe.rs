@@ -16,7 +16,7 @@ use akl_tsr::{Bounds, PoseJson, TaskSpec, Tsr};
 
 /// How much wider than a TSR's bounds a reached keyframe may be.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct KeyframeSlack {
+pub(crate) struct KeyframeSlack {
     /// Added to each position bound (metres).
     pub position: f64,
     /// Added to each angle bound (radians).
@@ -24,7 +24,7 @@ pub struct KeyframeSlack {
 }
 
 /// Slack of the simulation itself: 0.5 mm and 5 mrad.
-pub const SIMULATION_SLACK: KeyframeSlack = KeyframeSlack {
+pub(crate) const SIMULATION_SLACK: KeyframeSlack = KeyframeSlack {
     position: 5e-4,
     angle: 5e-3,
 };
@@ -32,7 +32,7 @@ pub const SIMULATION_SLACK: KeyframeSlack = KeyframeSlack {
 impl KeyframeSlack {
     /// The simulation's slack plus four standard deviations of a perception error of
     /// `position` metres and `yaw` radians.
-    pub fn with_perception(position: f64, yaw: f64) -> KeyframeSlack {
+    pub(crate) fn with_perception(position: f64, yaw: f64) -> KeyframeSlack {
         KeyframeSlack {
             position: SIMULATION_SLACK.position + 4.0 * position,
             angle: SIMULATION_SLACK.angle + 4.0 * yaw,
@@ -41,14 +41,14 @@ impl KeyframeSlack {
 
     /// The slack trials run with `options` are judged with: the simulation's plus four
     /// standard deviations of their perception error.
-    pub fn of(options: &ExecOptions) -> KeyframeSlack {
+    pub(crate) fn of(options: &ExecOptions) -> KeyframeSlack {
         KeyframeSlack::with_perception(options.noise.position, options.noise.yaw)
     }
 }
 
 /// One check per keyframe the plan reached; a failure for each missed (at its reach time) or
 /// never reached (with no time).
-pub fn check(
+pub(crate) fn check(
     spec: &TaskSpec,
     reaches: &[KeyframeReach],
     slack: &KeyframeSlack,

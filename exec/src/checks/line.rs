@@ -8,7 +8,7 @@ use akl_planner::line::distance_to_segment;
 
 /// One check per line; a failure for each that strayed further than `tolerance` (metres), at
 /// the first step the TCP was beyond it.
-pub fn check(lines: &[LinePath], tolerance: f64) -> (Vec<LineCheck>, Vec<Failure>) {
+pub(crate) fn check(lines: &[LinePath], tolerance: f64) -> (Vec<LineCheck>, Vec<Failure>) {
     let mut checks = Vec::with_capacity(lines.len());
     let mut failures = Vec::new();
     for line in lines {

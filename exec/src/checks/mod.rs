@@ -2,10 +2,10 @@
 //! ([`crate::simulate::Observations`]) and turns it into its report entries and failures. None of them reads
 //! the plan's own poses: the plan only says when a keyframe or a line happens.
 
-pub mod collision;
-pub mod goals;
-pub mod grasp;
-pub mod keyframe;
-pub mod line;
-pub mod release;
-pub mod slip;
+pub(crate) mod collision;
+pub(crate) mod goals;
+pub(crate) mod grasp;
+pub(crate) mod keyframe;
+pub(crate) mod line;
+pub(crate) mod release;
+pub(crate) mod slip;

@@ -8,7 +8,7 @@ use crate::simulate::observations::ReleaseEvent;
 /// One check per release; a failure for each object still in the hand at the end (`end`, the
 /// simulated seconds of the run) and each that fell further than `drop_limit` (metres), at its
 /// release.
-pub fn check(
+pub(crate) fn check(
     releases: &[ReleaseEvent],
     still_held: &[String],
     drop_limit: f64,

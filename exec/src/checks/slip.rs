@@ -6,7 +6,7 @@ use crate::simulate::observations::GraspEvent;
 
 /// A failure for each held object that slipped further than `limit` (metres), at the time it
 /// first moved beyond the limit (else when its weld broke, else the grasp's time).
-pub fn check(grasps: &[GraspEvent], limit: f64) -> Vec<Failure> {
+pub(crate) fn check(grasps: &[GraspEvent], limit: f64) -> Vec<Failure> {
     grasps
         .iter()
         .filter(|g| g.welded && g.slip > limit)

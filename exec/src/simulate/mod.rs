@@ -5,7 +5,7 @@
 //! [`ExecOptions::settle_max`]).
 
 mod gripper;
-pub mod observations;
+pub(crate) mod observations;
 
 use crate::arm::{PadReading, SimArm};
 use crate::contacts::{ContactLog, ContactPoint, ContactRoles, StepContext};
@@ -23,7 +23,7 @@ pub use observations::Observations;
 use observations::{KeyframeReach, LinePath};
 
 /// A label for a plan segment, e.g. `free motion to keyframe 2` or `lift after keyframe 0`.
-pub fn segment_label(kind: SegmentKind, keyframe: usize) -> String {
+pub(crate) fn segment_label(kind: SegmentKind, keyframe: usize) -> String {
     match kind {
         SegmentKind::Free => format!("free motion to keyframe {keyframe}"),
         SegmentKind::Line => format!("line to keyframe {keyframe}"),

@@ -128,7 +128,7 @@ impl Outbox {
 }
 
 /// One trial and what it needs to be drawn.
-pub struct TraceInput<'a> {
+pub(crate) struct TraceInput<'a> {
     /// The robot.
     pub robot: &'a Robot,
     /// The world the trial ran in (object shapes and names).
@@ -142,7 +142,7 @@ pub struct TraceInput<'a> {
 }
 
 /// Writes `input` as an MCAP trace to `path` (atomically: a temporary file, then renamed).
-pub fn write_trace(path: &Path, input: &TraceInput) -> Result<(), ExecError> {
+pub(crate) fn write_trace(path: &Path, input: &TraceInput) -> Result<(), ExecError> {
     let error = |e: WriteError| ExecError::Write {
         path: path.to_path_buf(),
         source: std::io::Error::other(e),
