@@ -74,7 +74,7 @@ impl Default for ContactLimits {
 
 /// The contact role of each robot link, and what the robot stands on.
 #[derive(Debug, Clone)]
-pub struct ContactRoles {
+pub(crate) struct ContactRoles {
     link_names: Vec<String>,
     roles: Vec<LinkRole>,
     mount: Option<String>,
@@ -82,7 +82,7 @@ pub struct ContactRoles {
 
 impl ContactRoles {
     /// The roles of `robot`'s links, standing in `world`.
-    pub fn new(robot: &Robot, world: &World) -> ContactRoles {
+    pub(crate) fn new(robot: &Robot, world: &World) -> ContactRoles {
         let roles = (0..robot.links().len())
             .map(|i| LinkRole {
                 hand: robot.hand_links().contains(&i),
@@ -187,7 +187,7 @@ enum Verdict {
 
 /// What one step may touch: the plan step's allowances, its name, and the object held.
 #[derive(Debug, Clone, Copy)]
-pub struct StepContext<'a> {
+pub(crate) struct StepContext<'a> {
     /// The contacts the step allows.
     pub allow: &'a Allowances,
     /// The object in the hand (index), if any.
@@ -229,7 +229,7 @@ pub struct ContactLog {
 impl ContactLog {
     /// Judges the contacts of the last step; returns each watched contact's point when
     /// `points` is asked for (traces).
-    pub fn scan(
+    pub(crate) fn scan(
         &mut self,
         sim: &SimWorld,
         roles: &ContactRoles,

@@ -4,8 +4,9 @@
 //! A [`batch::Batch`] runs a spec's seeded trials in parallel ([`run_trial`] is one of them) and
 //! gives a [`report::BatchReport`]; [`merge`] joins the reports of a run's shards ([`Shard`]) and
 //! resumes interrupted runs ([`Interrupt`]), and [`junit`] writes a report as JUnit XML. The
-//! simulation itself ([`SimWorld`], [`simulate`]) is public for tests and benchmarks that drive
-//! it directly; [`check_settles`] tells whether a task's world stands still untouched.
+//! simulation itself ([`SimWorld`], [`simulate`] and what it measures, [`Observations`]) is
+//! public for tests and benchmarks that drive it directly; [`check_settles`] tells whether a
+//! task's world stands still untouched.
 
 mod arm;
 pub mod batch;
@@ -30,16 +31,16 @@ mod visual;
 mod world;
 
 pub use arm::Drives;
-pub use contacts::{ContactLimits, ContactPoint};
+pub use contacts::{Collision, ContactLimits, ContactLog, ContactPoint, Extreme};
 pub use error::ExecError;
-pub use grasp::GraspLimits;
+pub use grasp::{GraspLimits, GraspMeasure};
 pub use interrupt::Interrupt;
 pub use junit::{junit, Suite};
 pub use options::{ExecOptions, Setup};
 pub use perception::PoseNoise;
 pub use settle::{check_settles, Unsettled, SETTLE_SECONDS, SETTLE_TOLERANCE};
 pub use shard::{Shard, ShardError, ShardRequest};
-pub use simulate::{simulate, Observations};
+pub use simulate::{simulate, GraspEvent, KeyframeReach, LinePath, Observations, ReleaseEvent};
 pub use timeline::{Frame, Timeline};
 pub use trace::TRACE_RATE;
 pub use trial::{run_trial, trial_world};

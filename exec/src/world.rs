@@ -47,7 +47,7 @@ impl Default for Physics {
 
 /// What a collider belongs to, stored in its `user_data`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Owner {
+pub(crate) enum Owner {
     /// The scene object with this index in [`SimWorld::objects`].
     Object(usize),
     /// The robot link with this index in the robot's link list.
@@ -58,7 +58,7 @@ const LINK_TAG: u128 = 1 << 64;
 
 impl Owner {
     /// The value stored in a collider's `user_data`.
-    pub fn to_user_data(self) -> u128 {
+    pub(crate) fn to_user_data(self) -> u128 {
         match self {
             Owner::Object(i) => i as u128,
             Owner::Link(i) => LINK_TAG | i as u128,
@@ -66,7 +66,7 @@ impl Owner {
     }
 
     /// The owner encoded by [`Owner::to_user_data`].
-    pub fn from_user_data(data: u128) -> Owner {
+    pub(crate) fn from_user_data(data: u128) -> Owner {
         if data & LINK_TAG != 0 {
             Owner::Link((data & !LINK_TAG) as usize)
         } else {
@@ -77,15 +77,13 @@ impl Owner {
 
 /// A scene object in the simulation.
 #[derive(Debug, Clone)]
-pub struct SimObject {
+pub(crate) struct SimObject {
     /// Its name in the task.
     pub name: String,
     /// Whether it is dynamic (movable) or fixed (furniture).
     pub movable: bool,
     /// Its body.
     pub body: RigidBodyHandle,
-    /// Its collider.
-    pub collider: ColliderHandle,
 }
 
 /// Pairs of a robot link and an object whose contacts the simulation does not compute: the
@@ -118,9 +116,9 @@ impl PhysicsHooks for UnsolvedPairs {
 /// A rapier world built from an AKL [`World`].
 pub struct SimWorld {
     /// The rapier state; exposed so the arm, grasp and contact modules can reach its parts.
-    pub physics: PhysicsWorld,
+    pub(crate) physics: PhysicsWorld,
     /// The scene objects, in the task's order.
-    pub objects: Vec<SimObject>,
+    pub(crate) objects: Vec<SimObject>,
     template: World,
     unsolved: UnsolvedPairs,
     time: f64,
@@ -172,15 +170,13 @@ impl SimWorld {
             if o.movable {
                 collider = collider.mass(o.mass as f32);
             }
-            let collider =
-                physics
-                    .colliders
-                    .insert_with_parent(collider, body, &mut physics.bodies);
+            physics
+                .colliders
+                .insert_with_parent(collider, body, &mut physics.bodies);
             objects.push(SimObject {
                 name: o.name.clone(),
                 movable: o.movable,
                 body,
-                collider,
             });
         }
         SimWorld {
@@ -205,13 +201,13 @@ impl SimWorld {
     }
 
     /// The fixed time step (seconds).
-    pub fn dt(&self) -> f64 {
+    pub(crate) fn dt(&self) -> f64 {
         self.dt
     }
 
     /// Stops (`true`) or resumes computing the contacts of robot link `link` with object
     /// `object`.
-    pub fn set_unsolved(&mut self, link: usize, object: usize, unsolved: bool) {
+    pub(crate) fn set_unsolved(&mut self, link: usize, object: usize, unsolved: bool) {
         let pair = (link, object);
         self.unsolved.pairs.retain(|p| *p != pair);
         if unsolved {
@@ -221,7 +217,7 @@ impl SimWorld {
 
     /// The substeps rapier solves a step in (its solver iterations): a joint's impulses are
     /// those of the last substep, a contact's the step's total.
-    pub fn substeps(&self) -> usize {
+    pub(crate) fn substeps(&self) -> usize {
         self.physics
             .integration_parameters
             .num_solver_iterations
@@ -229,7 +225,7 @@ impl SimWorld {
     }
 
     /// Index of the object named `name`.
-    pub fn object_index(&self, name: &str) -> Option<usize> {
+    pub(crate) fn object_index(&self, name: &str) -> Option<usize> {
         self.objects.iter().position(|o| o.name == name)
     }
 
@@ -240,7 +236,7 @@ impl SimWorld {
 
     /// Moves object `i` to `pose` at once, keeping its velocity (a squeeze seating it between
     /// the pads).
-    pub fn set_object_pose(&mut self, i: usize, pose: &Pose) {
+    pub(crate) fn set_object_pose(&mut self, i: usize, pose: &Pose) {
         let body = self.objects[i].body;
         if let Some(b) = self.physics.bodies.get_mut(body) {
             b.set_position(crate::convert::to_sim(pose), true);
@@ -248,7 +244,7 @@ impl SimWorld {
     }
 
     /// The linear and angular speed of object `i` (m/s, rad/s).
-    pub fn object_speed(&self, i: usize) -> (f64, f64) {
+    pub(crate) fn object_speed(&self, i: usize) -> (f64, f64) {
         let body = &self.physics.bodies[self.objects[i].body];
         let v: Vector3<f64> = vector_from_sim(body.linvel());
         let w: Vector3<f64> = vector_from_sim(body.angvel());
@@ -256,7 +252,7 @@ impl SimWorld {
     }
 
     /// The AKL world as it stands now: the task's world with every object at its simulated pose.
-    pub fn snapshot(&self) -> World {
+    pub(crate) fn snapshot(&self) -> World {
         let mut world = self.template.clone();
         for (i, o) in world.objects.iter_mut().enumerate() {
             o.pose = self.object_pose(i);
@@ -265,12 +261,12 @@ impl SimWorld {
     }
 
     /// The world the simulation was built from.
-    pub fn template(&self) -> &World {
+    pub(crate) fn template(&self) -> &World {
         &self.template
     }
 
     /// Who owns a collider.
-    pub fn owner(&self, collider: ColliderHandle) -> Option<Owner> {
+    pub(crate) fn owner(&self, collider: ColliderHandle) -> Option<Owner> {
         self.physics
             .colliders
             .get(collider)

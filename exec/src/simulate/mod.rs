@@ -19,8 +19,7 @@ use akl_scene::World;
 use akl_tsr::pose::position_distance;
 use akl_tsr::WORLD_FRAME;
 use gripper::Gripper;
-pub use observations::Observations;
-use observations::{KeyframeReach, LinePath};
+pub use observations::{GraspEvent, KeyframeReach, LinePath, Observations, ReleaseEvent};
 
 /// A label for a plan segment, e.g. `free motion to keyframe 2` or `lift after keyframe 0`.
 pub(crate) fn segment_label(kind: SegmentKind, keyframe: usize) -> String {
