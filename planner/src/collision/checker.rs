@@ -285,7 +285,7 @@ impl<'a> Checker<'a> {
             let role = model.role(b);
             let mut place: Option<Placement> = None;
             for (index, o) in self.scene.obstacles.iter().enumerate() {
-                let gap_sq = box_gap_sq(&bounds, &o.min, &o.max);
+                let gap_sq = box_gap_sq(&bounds, &o.target.min, &o.target.max);
                 if gap_sq > 0.0 && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
                     continue;
                 }
@@ -494,10 +494,11 @@ pub(super) fn clear_of(
     slack: f64,
 ) -> bool {
     let Some(pr) = proof else {
-        let overlap = (0..3).all(|i| bounds[0][i] <= o.max[i] && bounds[1][i] >= o.min[i]);
+        let overlap =
+            (0..3).all(|i| bounds[0][i] <= o.target.max[i] && bounds[1][i] >= o.target.min[i]);
         return !overlap || !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
     };
-    let gap_sq = box_gap_sq(bounds, &o.min, &o.max);
+    let gap_sq = box_gap_sq(bounds, &o.target.min, &o.target.max);
     if gap_sq > 0.0 {
         pr.limit(moved, slack + gap_sq.sqrt());
         return true;

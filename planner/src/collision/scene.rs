@@ -1,9 +1,8 @@
 //! The world as the checks see it: its objects, grown where the rules say, and the robot's base.
 
-use super::spheres::{Placement, Solid, Target};
+use super::spheres::Target;
 use crate::parry_convert;
 use akl_scene::World;
-use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d::shape::SharedShape;
 
@@ -13,9 +12,7 @@ pub(super) struct Obstacle {
     pub(super) name: String,
     pub(super) shape: SharedShape,
     pub(super) pose: Pose,
-    pub(super) min: Vector3<f64>,
-    pub(super) max: Vector3<f64>,
-    /// The object for closed-form distances from points.
+    /// The object for closed-form distances from points, with its world-axis-aligned box.
     pub(super) target: Target,
 }
 
@@ -38,27 +35,19 @@ impl Scene {
             .filter(|o| !without.contains(&o.name.as_str()))
         {
             let (shape, fix) = parry_convert::object_shape(&o.shape, 0.0);
-            let h = o.shape.world_half_extents(&o.pose);
-            let c = o.pose.translation.vector;
             obstacles.push(Obstacle {
                 name: o.name.clone(),
                 shape,
                 pose: o.pose * fix,
-                min: c - h,
-                max: c + h,
-                target: Target {
-                    solid: Solid::of(&o.shape),
-                    inverse: Placement::of(&o.pose.inverse()),
-                    min: c - h,
-                    max: c + h,
-                },
+                target: Target::of(&o.shape, &o.pose),
             });
         }
         let base = world.robot_base;
         let origin = base.translation.vector;
         let mount = obstacles.iter().position(|o| {
-            let inside = |i: usize| origin[i] >= o.min[i] - 1e-9 && origin[i] <= o.max[i] + 1e-9;
-            inside(0) && inside(1) && (o.max.z - origin.z).abs() <= akl_scene::SUPPORT_GAP
+            let (min, max) = (&o.target.min, &o.target.max);
+            let inside = |i: usize| origin[i] >= min[i] - 1e-9 && origin[i] <= max[i] + 1e-9;
+            inside(0) && inside(1) && (max.z - origin.z).abs() <= akl_scene::SUPPORT_GAP
         });
         Scene {
             obstacles,

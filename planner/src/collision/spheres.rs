@@ -184,6 +184,18 @@ pub(super) struct Target {
 }
 
 impl Target {
+    /// The object `shape` placed at `pose`, with its world-axis-aligned box.
+    pub(super) fn of(shape: &Shape, pose: &Pose) -> Target {
+        let h = shape.world_half_extents(pose);
+        let c = pose.translation.vector;
+        Target {
+            solid: Solid::of(shape),
+            inverse: Placement::of(&pose.inverse()),
+            min: c - h,
+            max: c + h,
+        }
+    }
+
     /// Distance from the world point `p` to the object (0 inside): exact for the primitives,
     /// the distance to its box for anything else (never more than the exact one).
     #[inline]
@@ -394,14 +406,7 @@ mod tests {
             pose in arb_pose(0.5),
             p in prop::array::uniform3(-1.0..1.0f64),
         ) {
-            let h = shape.world_half_extents(&pose);
-            let c = pose.translation.vector;
-            let target = Target {
-                solid: Solid::of(&shape),
-                inverse: Placement::of(&pose.inverse()),
-                min: c - h,
-                max: c + h,
-            };
+            let target = Target::of(&shape, &pose);
             let p = Vector3::from(p);
             let (parry, fix) = parry_convert::object_shape(&shape, 0.0);
             let local = (pose * fix).inverse() * Point3::from(p);
@@ -421,14 +426,7 @@ mod tests {
             margin in 0.0..0.02f64,
         ) {
             let (geometry, spheres) = &panda()[element % panda().len()];
-            let h = shape.world_half_extents(&pose);
-            let c = pose.translation.vector;
-            let target = Target {
-                solid: Solid::of(&shape),
-                inverse: Placement::of(&pose.inverse()),
-                min: c - h,
-                max: c + h,
-            };
+            let target = Target::of(&shape, &pose);
             let bound = target.gap(&spheres.grown(margin), &Placement::of(&at));
             let (element_shape, _) = parry_convert::robot_shape(geometry, margin);
             let (object, fix) = parry_convert::object_shape(&shape, 0.0);
