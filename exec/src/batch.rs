@@ -157,13 +157,7 @@ impl<'a> Batch<'a> {
         let reports: Vec<TrialReport> = if self.options.jobs == 1 {
             (0..self.indices.len()).map_while(run_one).collect()
         } else {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(self.options.jobs)
-                .build()
-                .map_err(|e| {
-                    ExecError::Options(format!("cannot start {} jobs: {e}", self.options.jobs))
-                })?;
-            pool.install(|| {
+            worker_pool(self.options.jobs)?.install(|| {
                 (0..self.indices.len())
                     .into_par_iter()
                     .filter_map(run_one)
@@ -321,6 +315,15 @@ fn sha256(text: &str) -> String {
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
+}
+
+/// A pool of `jobs` threads to run trials on: every part of a run that runs trials side by
+/// side takes its threads from here.
+pub fn worker_pool(jobs: usize) -> Result<rayon::ThreadPool, ExecError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| ExecError::Options(format!("cannot start {jobs} jobs: {e}")))
 }
 
 /// The seed of trial `i` of a batch seeded `seed`.

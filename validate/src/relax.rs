@@ -376,31 +376,34 @@ pub fn relax(
     let exec = verifying(&options.exec);
     let interrupted = || exec.interrupt.raised();
     let trials = AtomicUsize::new(0);
-    // Whether a spec passed its trial on a seed, each (spec, seed) run once.
+    // Whether a spec (by its JSON) passed its trial on a seed, each (spec, seed) run once.
     let earlier = Mutex::new(HashMap::<(String, u64), bool>::new());
-    let known = |spec: &TaskSpec, seed: u64| {
-        let earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
-        earlier.get(&(spec.to_json(), seed)).copied()
-    };
     // Whether each spec passes its seed's trial, those not yet known run in parallel; a
     // trial an interrupt kept from running counts as failed (and is not remembered).
     let replay = |asked: &[(TaskSpec, u64)]| -> Result<Vec<bool>, ValidateError> {
-        let unknown: Vec<(&TaskSpec, u64)> = asked
+        let keys: Vec<(String, u64)> = asked
             .iter()
-            .filter(|(spec, seed)| known(spec, *seed).is_none())
-            .map(|(spec, seed)| (spec, *seed))
+            .map(|(spec, seed)| (spec.to_json(), *seed))
             .collect();
+        let todo: Vec<usize> = {
+            let earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
+            (0..asked.len())
+                .filter(|i| !earlier.contains_key(&keys[*i]))
+                .collect()
+        };
+        let unknown: Vec<(&TaskSpec, u64)> =
+            todo.iter().map(|i| (&asked[*i].0, asked[*i].1)).collect();
         let ran = run_each(robot, task, &exec, &unknown, options.jobs, &|_| false)?;
-        for ((spec, seed), report) in unknown.iter().zip(ran) {
+        let mut earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
+        for (i, report) in todo.into_iter().zip(ran) {
             if let Some(report) = report {
                 trials.fetch_add(1, Ordering::Relaxed);
-                let mut earlier = earlier.lock().unwrap_or_else(PoisonError::into_inner);
-                earlier.insert((spec.to_json(), *seed), report.passed);
+                earlier.insert(keys[i].clone(), report.passed);
             }
         }
-        Ok(asked
+        Ok(keys
             .iter()
-            .map(|(spec, seed)| known(spec, *seed).unwrap_or(false))
+            .map(|key| earlier.get(key).copied().unwrap_or(false))
             .collect())
     };
     let mut next_seed = options.seed;

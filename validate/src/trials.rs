@@ -2,7 +2,7 @@
 //! number of them ([`run_trials`]) or as many as the deployment gate needs to decide
 //! ([`run_gated`]).
 
-use akl_exec::batch::{trial_seed, Batch, BatchOptions};
+use akl_exec::batch::{trial_seed, worker_pool, Batch, BatchOptions};
 use akl_exec::report::{BatchReport, Cause, TrialReport};
 use akl_exec::{ExecError, ExecOptions};
 use akl_planner::goal::GoalStrategy;
@@ -205,12 +205,8 @@ pub fn run_each(
     if jobs == 0 {
         return Err(ExecError::Options("needs at least one job".into()));
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .build()
-        .map_err(|e| ExecError::Options(format!("cannot start {jobs} jobs: {e}")))?;
     let stopped = AtomicBool::new(false);
-    pool.install(|| {
+    worker_pool(jobs)?.install(|| {
         trials
             .par_iter()
             .with_max_len(1)
