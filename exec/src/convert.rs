@@ -1,16 +1,23 @@
 //! The one place where AKL's nalgebra `f64` poses and shapes become rapier3d's glam `f32`
 //! types, and back.
 
+use akl_mesh::ConvexHull;
 use akl_planner::parry_convert::cylinder_axis;
 use akl_planner::Geometry;
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
-use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, SharedShape, Vector};
+use rapier3d::prelude::{ColliderBuilder, Pose as SimPose, Rotation, SharedShape, Vector};
 
-/// A pose as rapier's single-precision pose (rapier's poses are parry3d's, so the planner's
-/// conversion serves both).
-pub(crate) use akl_planner::parry_convert::pose as to_sim;
+/// A pose as rapier's single-precision pose.
+pub(crate) fn to_sim(p: &Pose) -> SimPose {
+    let t = p.translation.vector;
+    let q = p.rotation.quaternion().coords;
+    SimPose::from_parts(
+        Vector::new(t.x as f32, t.y as f32, t.z as f32),
+        Rotation::from_xyzw(q.x as f32, q.y as f32, q.z as f32, q.w as f32).normalize(),
+    )
+}
 
 /// A rapier pose as an AKL pose.
 pub(crate) fn from_sim(p: &SimPose) -> Pose {
@@ -48,7 +55,9 @@ pub(crate) fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
             ColliderBuilder::new(capsule_object(radius, length)).position(to_sim(origin))
         }
         Shape::Sphere { radius } => ColliderBuilder::ball(radius as f32).position(to_sim(origin)),
-        Shape::Mesh { .. } => ColliderBuilder::new(mesh_object(shape)).position(to_sim(origin)),
+        Shape::Mesh { ref hull, .. } => {
+            ColliderBuilder::new(mesh_object(hull.as_deref())).position(to_sim(origin))
+        }
     }
 }
 
@@ -65,8 +74,17 @@ const SLAB_DEPTH: f64 = 0.001;
 /// hexagonal part stands on four corners along one side of its base and rocks (untouched on a
 /// shelf it tilted 0.019 rad and slid 1.8 mm). A slab's face gives four corners round the
 /// whole face; the hull keeps the object's shape.
-fn mesh_object(shape: &Shape) -> SharedShape {
-    let hull = akl_planner::parry_convert::object_shape(shape, 0.0).0;
+fn mesh_object(hull: Option<&ConvexHull>) -> SharedShape {
+    let points: Vec<Vector> = hull
+        .iter()
+        .flat_map(|h| h.vertices.iter())
+        .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+        .collect();
+    // A mesh whose hull was measured when the task was loaded always has one; an unread one
+    // (refused by task validation) is a point, as the planner takes it.
+    let Some(hull) = SharedShape::convex_hull(&points) else {
+        return SharedShape::ball(0.0);
+    };
     let Some(polyhedron) = hull.as_convex_polyhedron() else {
         return hull;
     };

@@ -12,7 +12,7 @@ use akl_planner::{parry_convert, Robot};
 use akl_scene::builtin;
 use akl_tsr::Pose;
 use criterion::{black_box, Criterion};
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Duration;

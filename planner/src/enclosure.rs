@@ -15,8 +15,8 @@ use crate::meshes::{LinkMesh, MeshRole};
 use akl_mesh::Capsule;
 use akl_tsr::nalgebra::{Point3, Translation3, UnitQuaternion, Vector3};
 use akl_tsr::Pose;
-use parry3d::math::Vector;
-use parry3d::query::PointQuery;
+use parry3d_f64::math::Vector;
+use parry3d_f64::query::PointQuery;
 use std::sync::Arc;
 
 /// Longest triangle edge the capsule fitter sees (metres): a triangle must lie in one
@@ -119,10 +119,10 @@ fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
             .iter()
             .map(|&i| {
                 let v = vertices[i];
-                Vector::new(v.x as f32, v.y as f32, v.z as f32)
+                Vector::new(v.x, v.y, v.z)
             })
             .collect();
-        let hull = parry3d::transformation::try_convex_hull(&points).ok();
+        let hull = parry3d_f64::transformation::try_convex_hull(&points).ok();
         let hull = hull.filter(|(_, t)| !t.is_empty());
         let worst = match &hull {
             Some((v, t)) => {
@@ -131,7 +131,7 @@ fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
                     .map(|t| {
                         t.map(|i| {
                             let p = v[i as usize];
-                            Point3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z))
+                            Point3::new(p.x, p.y, p.z)
                         })
                     })
                     .collect();
@@ -154,10 +154,7 @@ fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
             worst.1 <= HULL_TOLERANCE || kept.len() >= MAX_HULL_VERTICES || kept.contains(&worst.0);
         match hull {
             Some((v, t)) if done => {
-                let v = v
-                    .iter()
-                    .map(|p| Point3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z)))
-                    .collect();
+                let v = v.iter().map(|p| Point3::new(p.x, p.y, p.z)).collect();
                 return Some((v, t));
             }
             None if kept.contains(&worst.0) => return None,
@@ -249,15 +246,10 @@ pub fn stand_off(shape: &LinkShape, meshes: &[&LinkMesh], spacing: f64) -> Optio
     let mut indices = Vec::new();
     for m in meshes {
         let offset = vertices.len() as u32;
-        vertices.extend(
-            m.mesh
-                .vertices
-                .iter()
-                .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32)),
-        );
+        vertices.extend(m.mesh.vertices.iter().map(|v| Vector::new(v.x, v.y, v.z)));
         indices.extend(m.mesh.triangles.iter().map(|t| t.map(|i| i + offset)));
     }
-    let surface = parry3d::shape::TriMesh::new(vertices, indices).ok()?;
+    let surface = parry3d_f64::shape::TriMesh::new(vertices, indices).ok()?;
     let mut sum = 0.0;
     let mut max: f64 = 0.0;
     let mut n = 0usize;
@@ -278,8 +270,8 @@ pub fn stand_off(shape: &LinkShape, meshes: &[&LinkMesh], spacing: f64) -> Optio
                     (j as f64 + 1.0 / 3.0) / steps as f64,
                 );
                 let p = a + u * (b - a) + v * (c - a) + hull.border * normal;
-                let at = Vector::new(p.x as f32, p.y as f32, p.z as f32);
-                let d = f64::from(surface.distance_to_local_point(at, false));
+                let at = Vector::new(p.x, p.y, p.z);
+                let d = surface.distance_to_local_point(at, false);
                 sum += d;
                 max = max.max(d);
                 n += 1;

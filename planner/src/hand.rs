@@ -23,7 +23,7 @@ use crate::{Geometry, Robot, ShapeRole};
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 
 /// An axis-aligned box in some frame: its centre and half extents.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,8 +61,8 @@ fn bounds(shapes: &[(Geometry, Pose)]) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let (shape, fix) = robot_shape(geometry, 0.0);
         let aabb = shape.compute_aabb(&pose(&(origin * fix)));
         for k in 0..3 {
-            lo[k] = lo[k].min(f64::from(aabb.mins[k]));
-            hi[k] = hi[k].max(f64::from(aabb.maxs[k]));
+            lo[k] = lo[k].min(aabb.mins[k]);
+            hi[k] = hi[k].max(aabb.maxs[k]);
         }
     }
     (lo.x <= hi.x).then_some((lo, hi))
@@ -443,9 +443,7 @@ impl HandModel {
                 let (lo, hi) = (aabb.mins, aabb.maxs);
                 let local = origin * fix;
                 (0..8).map(move |k| {
-                    let pick = |bit: usize, l: f32, h: f32| {
-                        f64::from(if k >> bit & 1 == 0 { l } else { h })
-                    };
+                    let pick = |bit: usize, l: f64, h: f64| if k >> bit & 1 == 0 { l } else { h };
                     let c = Point3::new(
                         pick(0, lo.x, hi.x),
                         pick(1, lo.y, hi.y),

@@ -705,8 +705,8 @@ mod tests {
     /// meshes) intersect in none of 20,000 random configurations with random openings.
     #[test]
     fn the_unchecked_link_pairs_never_meet() {
-        use parry3d::math::Vector;
-        use parry3d::shape::ConvexPolyhedron;
+        use parry3d_f64::math::Vector;
+        use parry3d_f64::shape::ConvexPolyhedron;
         use rand::{Rng, SeedableRng};
         let robot = Robot::panda().unwrap();
         let links = robot.links();
@@ -717,7 +717,7 @@ mod tests {
                     .iter()
                     .filter(|m| m.link == i)
                     .flat_map(|m| &m.mesh.vertices)
-                    .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+                    .map(|v| Vector::new(v.x, v.y, v.z))
                     .collect();
                 ConvexPolyhedron::from_convex_hull(&points)
             })
@@ -759,7 +759,7 @@ mod tests {
                 let (Some(ha), Some(hb)) = (&hulls[a], &hulls[b]) else {
                     continue;
                 };
-                let meet = parry3d::query::intersection_test(
+                let meet = parry3d_f64::query::intersection_test(
                     &crate::parry_convert::pose(&poses[a]),
                     ha,
                     &crate::parry_convert::pose(&poses[b]),

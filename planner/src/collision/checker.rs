@@ -13,7 +13,7 @@ use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 use smallvec::SmallVec;
 use std::cell::Cell;
 use std::collections::VecDeque;

@@ -3,7 +3,7 @@
 use crate::parry_convert;
 use akl_scene::Shape;
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 
 /// An object held in the hand: it moves rigidly with the TCP.
 #[derive(Debug, Clone)]

@@ -10,7 +10,7 @@ use crate::parry_convert;
 use crate::robot::Robot;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 
 /// Thickest slab an element is cut into for the balls that hold it (metres): two or three
 /// balls per arm link. Thinner slabs (0.03–0.08 m) bound tighter but cost more than they save

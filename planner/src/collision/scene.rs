@@ -4,7 +4,7 @@ use super::spheres::Target;
 use crate::parry_convert;
 use akl_scene::World;
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 
 /// A scene object prepared for checking.
 #[derive(Debug, Clone)]

@@ -410,8 +410,8 @@ mod tests {
             let p = Vector3::from(p);
             let (parry, fix) = parry_convert::object_shape(&shape, 0.0);
             let local = (pose * fix).inverse() * Point3::from(p);
-            let local = parry3d::math::Vector::new(local.x as f32, local.y as f32, local.z as f32);
-            let exact = f64::from(parry.as_ref().distance_to_local_point(local, true));
+            let local = parry3d_f64::math::Vector::new(local.x, local.y, local.z);
+            let exact = parry.as_ref().distance_to_local_point(local, true);
             prop_assert!((target.distance(&p) - exact).abs() <= PARRY, "{} {}", target.distance(&p), exact);
         }
 

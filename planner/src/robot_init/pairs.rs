@@ -5,7 +5,7 @@
 use crate::parry_convert::{intersects, robot_shape};
 use crate::robot::Robot;
 use akl_tsr::Pose;
-use parry3d::shape::SharedShape;
+use parry3d_f64::shape::SharedShape;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
 
