@@ -24,8 +24,15 @@ use std::sync::Arc;
 pub const MAX_EDGE: f64 = 0.01;
 
 /// The grown hull holding `meshes` (all of one link, in its frame), as a collision shape;
-/// `None` when the meshes span no volume.
+/// `None` when the meshes span no volume. The hull is simplified to [`HULL_TOLERANCE`].
 pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
+    enclose_within(meshes, HULL_TOLERANCE)
+}
+
+/// [`enclose`] with the hull simplified until the dropped vertices reach at most `tolerance`
+/// beyond it (or [`MAX_HULL_VERTICES`] are kept): the border, which grows the hull in every
+/// direction, is then about that small.
+pub fn enclose_within(meshes: &[&LinkMesh], tolerance: f64) -> Option<LinkShape> {
     let collision: Vec<&LinkMesh> = meshes
         .iter()
         .copied()
@@ -42,7 +49,7 @@ pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
     let named = std::path::Path::new(&base.first()?.uri);
     let hull = akl_mesh::ConvexHull::of(&points, named).ok()?;
     let full: Vec<Point3<f64>> = hull.vertices.iter().map(|v| v + hull.offset).collect();
-    let (vertices, triangles) = simplified(&full)?;
+    let (vertices, triangles) = simplified(&full, tolerance)?;
     let faces: Vec<[Point3<f64>; 3]> = triangles
         .iter()
         .map(|t| t.map(|i| vertices[i as usize]))
@@ -88,11 +95,20 @@ pub const MAX_HULL_VERTICES: usize = 48;
 /// (metres).
 pub const HULL_TOLERANCE: f64 = 0.002;
 
+/// [`HULL_TOLERANCE`] for the links a revolute gripper joint swings (a linkage's knuckles,
+/// bars and fingertips, such as the Robotiq 2F-85's): they pass within millimetres of what the
+/// pads close on by design (the inner knuckles sweep in over a grasped block's top edge), so a
+/// border of 2 mm on every side of their hulls (the 2F-85's knuckle links kept 17–21 vertices
+/// and grew 1.7–2.1 mm) forbids grasps the real linkage clears. At 0.25 mm they keep 35–48
+/// vertices and grow 0.7–1.0 mm (what is left is mostly the visual meshes reaching past the
+/// collision meshes). Prismatic fingers are not swung: the Panda's hulls are unchanged.
+pub const LINKAGE_HULL_TOLERANCE: f64 = 0.000_25;
+
 /// A hull of a subset of the convex polytope `vertices`: starting from the extreme vertices in
 /// 14 directions, the vertex furthest outside the current hull is added until none is further
-/// than [`HULL_TOLERANCE`] or [`MAX_HULL_VERTICES`] are kept. The caller grows it by what is
-/// left outside.
-fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
+/// than `tolerance` or [`MAX_HULL_VERTICES`] are kept. The caller grows it by what is left
+/// outside.
+fn simplified(vertices: &[Point3<f64>], tolerance: f64) -> Option<Polytope> {
     let mut kept: Vec<usize> = Vec::new();
     for dx in [-1.0, 0.0, 1.0] {
         for dy in [-1.0, 0.0, 1.0] {
@@ -151,7 +167,7 @@ fn simplified(vertices: &[Point3<f64>]) -> Option<Polytope> {
                 .max_by(|a, b| a.1.total_cmp(&b.1))?,
         };
         let done =
-            worst.1 <= HULL_TOLERANCE || kept.len() >= MAX_HULL_VERTICES || kept.contains(&worst.0);
+            worst.1 <= tolerance || kept.len() >= MAX_HULL_VERTICES || kept.contains(&worst.0);
         match hull {
             Some((v, t)) if done => {
                 let v = v.iter().map(|p| Point3::new(p.x, p.y, p.z)).collect();
@@ -417,6 +433,52 @@ mod tests {
         let so = stand_off(&shape, &[&collision, &visual], 0.01).unwrap();
         // (to what parry's single-precision nearest points resolve)
         assert!(so.max <= hull.border + 1e-5, "{so:?}");
+    }
+
+    /// A round mesh (a cylinder of 32 sides, 1 cm in radius): at 2 mm the hull keeps few of its vertices and
+    /// grows by what the dropped ones reach; at the linkage's 0.25 mm it keeps more and grows
+    /// less. Either way every vertex lies within the grown hull.
+    #[test]
+    fn a_finer_tolerance_keeps_more_vertices_and_grows_less() {
+        let sides: u32 = 32;
+        let (radius, half) = (0.01, 0.03);
+        let mut vertices = Vec::new();
+        for k in 0..sides {
+            let a = std::f64::consts::TAU * f64::from(k) / f64::from(sides);
+            for z in [-half, half] {
+                vertices.push(Point3::new(radius * a.cos(), radius * a.sin(), z));
+            }
+        }
+        let mut triangles = Vec::new();
+        for k in 0..sides {
+            let (a, b) = (2 * k, 2 * ((k + 1) % sides));
+            triangles.push([a, b, a + 1]);
+            triangles.push([b, b + 1, a + 1]);
+        }
+        let cylinder = mesh(MeshRole::Collision, vertices, triangles);
+        let grown = |tolerance: f64| {
+            let shape = enclose_within(&[&cylinder], tolerance).unwrap();
+            let Geometry::RoundHull(hull) = &shape.geometry else {
+                panic!("{shape:?}")
+            };
+            let faces: Vec<[Point3<f64>; 3]> = hull
+                .triangles
+                .iter()
+                .map(|t| t.map(|i| shape.origin * hull.vertices[i as usize]))
+                .collect();
+            for v in &cylinder.mesh.vertices {
+                assert!(outside_distance(v, &faces) <= hull.border, "{v}");
+            }
+            (hull.vertices.len(), hull.border)
+        };
+        let (coarse, fine) = (grown(HULL_TOLERANCE), grown(LINKAGE_HULL_TOLERANCE));
+        assert!(fine.0 > coarse.0, "{coarse:?} {fine:?}");
+        assert!(fine.1 <= LINKAGE_HULL_TOLERANCE + 1e-6, "{fine:?}");
+        assert!(coarse.1 > 2.0 * fine.1, "{coarse:?} {fine:?}");
+        assert_eq!(
+            enclose(&[&cylinder]).unwrap(),
+            enclose_within(&[&cylinder], HULL_TOLERANCE).unwrap()
+        );
     }
 
     #[test]

@@ -154,6 +154,24 @@ pub fn find_goals<T, R: Rng + ?Sized>(
     seed: &[f64],
     options: &GoalOptions,
     rng: &mut R,
+    accept: impl FnMut(&Pose, &[f64]) -> Result<T, String>,
+) -> Result<Vec<Candidate<T>>, GoalFailure> {
+    find_fitted_goals(robot, tsr, base, seed, options, rng, |p| *p, accept)
+}
+
+/// [`find_goals`] with each pose moved by `fit` before inverse kinematics: the caller moves a
+/// drawn pose (within the region) to where it can be used, or returns it as it is (the
+/// planner's grasps and releases, see `task::fit`). Each pose is fitted once, when its turn
+/// comes, so poses never tried cost nothing.
+#[allow(clippy::too_many_arguments)]
+pub fn find_fitted_goals<T, R: Rng + ?Sized>(
+    robot: &Robot,
+    tsr: &Tsr,
+    base: &Pose,
+    seed: &[f64],
+    options: &GoalOptions,
+    rng: &mut R,
+    fit: impl Fn(&Pose) -> Pose,
     mut accept: impl FnMut(&Pose, &[f64]) -> Result<T, String>,
 ) -> Result<Vec<Candidate<T>>, GoalFailure> {
     let poses = tsr_poses(tsr, options.poses, options.strategy, rng);
@@ -172,10 +190,11 @@ pub fn find_goals<T, R: Rng + ?Sized>(
     for (c, group) in poses.chunks(chunk).enumerate() {
         tried += group.len();
         let mut branches: Vec<(Pose, Vec<f64>)> = Vec::new();
-        for pose in group {
+        for drawn in group {
+            let pose = fit(drawn);
             let target = base_inv * pose;
             for q in robot.ik_solutions(&target, seed, options.solutions_per_pose) {
-                branches.push((*pose, q));
+                branches.push((pose, q));
             }
         }
         if options.strategy == GoalStrategy::Spread {

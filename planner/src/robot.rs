@@ -4,7 +4,7 @@
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
 use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
-use crate::fk::{ArmJoints, Kinematics, Link, UrdfJoints};
+use crate::fk::{ArmJoints, Drive, Kinematics, Link, Motion, UrdfJoints};
 use crate::geometry::LinkShape;
 use crate::hand::HandModel;
 use crate::ik::{DlsIk, IkSolver, PandaIk, TracIk};
@@ -76,13 +76,37 @@ impl LinkGeometry {
             .into_iter()
             .map(|link| {
                 let own: Vec<&LinkMesh> = meshes.iter().filter(|m| m.link == link).collect();
-                (link, enclosure::enclose(&own))
+                let tolerance = if swung_by_gripper(kin, link) {
+                    enclosure::LINKAGE_HULL_TOLERANCE
+                } else {
+                    enclosure::HULL_TOLERANCE
+                };
+                (link, enclosure::enclose_within(&own, tolerance))
             })
             .collect();
         Ok(LinkGeometry {
             meshes: meshes.into(),
             enclosures,
         })
+    }
+}
+
+/// Whether a revolute joint the gripper opening drives moves `link` (its own joint or one
+/// nearer the root): the link is part of a linkage that swings as the gripper closes.
+fn swung_by_gripper(kin: &Kinematics, mut link: usize) -> bool {
+    let links = kin.links();
+    loop {
+        if let Motion::Revolute {
+            drive: Drive::Width { .. },
+            ..
+        } = links[link].motion
+        {
+            return true;
+        }
+        match links[link].parent {
+            Some(parent) => link = parent,
+            None => return false,
+        }
     }
 }
 
@@ -464,22 +488,32 @@ impl Robot {
         &self.arm.continuous
     }
 
-    /// Moves each continuous joint of `q` by whole turns to the angle nearest `seed`'s
-    /// that stays within its planned range.
+    /// Whether arm joint `i` can stand at one angle and at that angle a whole turn further,
+    /// both within its planned range: a continuous joint, or a revolute joint whose limits
+    /// span more than a turn (UR's descriptions bound every joint to a turn either way).
+    fn turns(&self, i: usize) -> bool {
+        let [lo, hi] = self.arm.limits[i];
+        self.arm.continuous[i] || (self.arm.revolute[i] && hi - lo > std::f64::consts::TAU)
+    }
+
+    /// Moves each joint of `q` that [turns](Robot::turns) by whole turns to the angle nearest
+    /// `seed`'s that stays within its planned range (left as it is when no other turn does).
+    /// A solver's restarts land on either turn at random, and the far one is the same pose a
+    /// whole turn of the joint away: a planner given it must swing the link all the way round,
+    /// through whatever it passes (a UR5e's upper arm through the table).
     fn nearest_turns(&self, mut q: Vec<f64>, seed: &[f64]) -> Vec<f64> {
         use std::f64::consts::TAU;
         for (i, v) in q.iter_mut().enumerate() {
-            if let (true, Some(s)) = (self.arm.continuous[i], seed.get(i)) {
-                let [lo, hi] = self.arm.limits[i];
-                let near = *v + ((s - *v) / TAU).round() * TAU;
-                *v = if near < lo {
-                    near + TAU
-                } else if near > hi {
-                    near - TAU
-                } else {
-                    near
-                };
-            }
+            let Some(s) = seed.get(i).filter(|_| self.turns(i)) else {
+                continue;
+            };
+            let [lo, hi] = self.arm.limits[i];
+            let near = *v + ((s - *v) / TAU).round() * TAU;
+            *v = [near, near + TAU, near - TAU, *v]
+                .into_iter()
+                .filter(|a| (lo..=hi).contains(a))
+                .min_by(|a, b| (a - s).abs().total_cmp(&(b - s).abs()))
+                .unwrap_or(*v);
         }
         q
     }
@@ -559,7 +593,7 @@ impl Robot {
         let found = self
             .ik
             .solutions(&self.kin, tcp, seed, max, SOLUTION_SPACING);
-        if !self.arm.continuous.contains(&true) {
+        if !(0..self.dof()).any(|i| self.turns(i)) {
             return found;
         }
         // Solutions a whole turn apart become one once moved to the turn nearest the seed.

@@ -124,6 +124,61 @@ fn continuous_joints_are_unbounded_and_answered_at_the_turn_nearest_the_seed() {
     );
 }
 
+/// A revolute joint bounded a turn either way (as UR's descriptions bound theirs) holds every
+/// angle twice; a solver's restarts land on either turn, and the far one is the same pose a
+/// whole turn of the joint away. Such a joint is answered at the turn nearest the seed, like a
+/// continuous one; a joint whose range is less than a turn is never moved.
+#[test]
+fn revolute_joints_bounded_past_a_turn_are_answered_at_the_turn_nearest_the_seed() {
+    use std::f64::consts::TAU;
+    let urdf = ARM.replace(
+        r#"<limit lower="-3" upper="3" effort="10" velocity="3"/>"#,
+        &format!(
+            r#"<limit lower="{}" upper="{TAU}" effort="10" velocity="3"/>"#,
+            -TAU
+        ),
+    );
+    let robot = arm(ARM_TOML, &urdf).unwrap();
+    assert_eq!(robot.joint_limits()[3], [-TAU, TAU]);
+    assert!(!robot.continuous_joints()[3]);
+    let seed = [0.0, 0.3, 1.0, -2.9, 1.0, 0.0];
+    // Joint 4 (±2π) a turn away from the seed comes back; joints 2 and 3 (ranges of 4 and
+    // 5 rad) cannot turn within their limits and stay.
+    let moved = robot.nearest_turns(vec![0.0, 1.9, -2.4, 3.0, 1.0, 0.0], &seed);
+    assert!((moved[3] - (3.0 - TAU)).abs() < 1e-12, "{moved:?}");
+    assert_eq!(moved[1..3], [1.9, -2.4]);
+    // Every solution returned is at the seed's turn.
+    let target = robot.tcp_pose(&[0.0, 0.3, 1.0, -2.9 + TAU, 1.0, 0.0]);
+    let solutions = robot.ik_solutions(&target, &seed, 6);
+    assert!(!solutions.is_empty());
+    for q in &solutions {
+        assert!(
+            (q[3] - seed[3]).abs() <= std::f64::consts::PI + 1e-9,
+            "{q:?}"
+        );
+    }
+    // The stock arm (joint 4 within ±3 rad) is left as the solver answers.
+    let stock = arm(ARM_TOML, ARM).unwrap();
+    let kept = stock.nearest_turns(vec![0.0, 0.3, 1.0, 2.9, 1.0, 0.0], &seed);
+    assert_eq!(kept[3], 2.9);
+}
+
+/// The links a revolute gripper joint swings (a linkage's knuckles and tips) are the ones
+/// enclosed to the finer tolerance; the arm, the hand and prismatic fingers are not.
+#[test]
+fn only_the_links_a_revolute_gripper_swings_count_as_swung() {
+    let robot = linkage_arm_with_bars();
+    let swung: Vec<&str> = (0..robot.links().len())
+        .filter(|&i| swung_by_gripper(robot.kinematics(), i))
+        .map(|i| robot.links()[i].name.as_str())
+        .collect();
+    assert_eq!(swung, ["left_k", "left_tip", "right_k", "right_tip"]);
+    let prismatic = arm(ARM_TOML, ARM).unwrap();
+    assert!((0..prismatic.links().len()).all(|i| !swung_by_gripper(prismatic.kinematics(), i)));
+    let panda = Robot::panda().unwrap();
+    assert!((0..panda.links().len()).all(|i| !swung_by_gripper(panda.kinematics(), i)));
+}
+
 #[test]
 fn a_mimicked_finger_moves_half_the_width_like_the_listed_one() {
     let robot = arm(ARM_TOML, ARM).unwrap();
@@ -282,7 +337,7 @@ fn linkage_toml() -> String {
 
 /// The linkage arm with a bar on each knuckle, as the 2F-85's inner knuckles: links that
 /// the closing swings in above the pads.
-fn linkage_arm_with_bars() -> Robot {
+pub(crate) fn linkage_arm_with_bars() -> Robot {
     let bar = |side: &str| {
         format!(
             r#"<link name="{side}_k"><collision><origin xyz="0 0 0.02"/>

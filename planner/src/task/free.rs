@@ -7,7 +7,7 @@ use super::{
 use crate::collision::{Checker, Held, Scene};
 use crate::contact_rules::{Allowances, Step};
 use crate::error::PlanError;
-use crate::goal::{find_goals, GoalFailure};
+use crate::goal::{find_fitted_goals, GoalFailure};
 use crate::line::plan_line;
 use crate::plan::{LinePoses, SegmentKind};
 use crate::rrt::{rrt_connect, RrtResult};
@@ -79,7 +79,7 @@ impl Planner<'_> {
                 return Err(hit.to_string());
             }
             if let Some(Event::Grasp { object }) = event {
-                this.check_closing(&this.world, object, pose, q)?;
+                this.check_closing(&this.world, object, pose)?;
             }
             let approach = match event {
                 Some(_) => {
@@ -115,13 +115,19 @@ impl Planner<'_> {
         };
         let mut rng = self.rng.clone();
         let mut own = self.sampled_stream(kf);
-        let candidates = find_goals(
+        let fit = |pose: &Pose| match event {
+            Some(Event::Grasp { object }) => this.fit_grasp(&kf.tsr, object, pose),
+            Some(Event::Release { support, .. }) => this.fit_release(&kf.tsr, support, pose),
+            None => *pose,
+        };
+        let candidates = find_fitted_goals(
             self.robot,
             &kf.tsr,
             &base,
             &self.q,
             &self.options.goals,
             own.as_mut().unwrap_or(&mut rng),
+            fit,
             accept,
         )
         .map_err(|failure| match failure {

@@ -82,12 +82,10 @@ impl Planner<'_> {
                 for target in &targets {
                     match self.line_to(target, &allow) {
                         Ok(planned) => {
-                            if let (Some(Event::Grasp { object }), Some(end)) =
+                            if let (Some(Event::Grasp { object }), Some(_)) =
                                 (event, planned.path.last())
                             {
-                                if let Err(why) =
-                                    self.check_closing(&self.world, object, target, end)
-                                {
+                                if let Err(why) = self.check_closing(&self.world, object, target) {
                                     cannot_close.get_or_insert(why);
                                     continue;
                                 }
@@ -239,9 +237,8 @@ impl Planner<'_> {
         for target in crate::goal::tsr_poses(&next.tsr, 4, self.options.goals.strategy, rng) {
             match plan_line(&space, q, pose, &target, &self.base(), &self.options.line) {
                 Ok(path) => {
-                    if let (true, Some(end)) = (next_closes, path.last()) {
-                        if let Err(why) = self.check_closing(&world, &next.reference, &target, end)
-                        {
+                    if next_closes && !path.is_empty() {
+                        if let Err(why) = self.check_closing(&world, &next.reference, &target) {
                             closing.get_or_insert(why);
                             continue;
                         }

@@ -32,6 +32,7 @@
 //! gripper takes its travel time plus a settling pause at each event, the arm standing still.
 //! Everything is deterministic for a given seed.
 
+mod fit;
 mod free;
 mod gripper;
 mod lines;
@@ -43,7 +44,7 @@ use crate::collision::{Checker, Held, RobotCollision, Scene};
 use crate::contact_rules::{Allowances, Step};
 use crate::error::PlanError;
 use crate::goal::GoalStrategy;
-use crate::hand::{closing_clearance, HandModel};
+use crate::hand::HandModel;
 use crate::line::LineFailure;
 use crate::options::PlanOptions;
 use crate::plan::{GripperEvent, LinePoses, Plan, Segment, PLAN_VERSION};
@@ -250,28 +251,14 @@ impl<'a> Planner<'a> {
         self.base() * self.robot.tcp_pose(q)
     }
 
-    /// Whether the gripper can close on `object` of `world` with the arm at `q` and the TCP at
-    /// `pose`: the parts of a linkage other than its pads keep the held object's margin from
-    /// the object (about to be held: the margin kept between a held object and the arm) at
-    /// every opening of the closing ([`closing_clearance`]). Prismatic fingers always can (only
-    /// their pads move).
-    fn check_closing(
-        &self,
-        world: &World,
-        object: &str,
-        pose: &Pose,
-        q: &[f64],
-    ) -> Result<(), String> {
-        let Some(hand) = &self.hand else {
-            return Ok(());
-        };
-        let o = world
-            .object(object)
-            .ok_or_else(|| format!("no object `{object}`"))?;
-        let width = grasp_width(&o.shape, &o.pose, pose).min(self.robot.open_width());
-        let in_base = self.base().inverse() * o.pose;
+    /// Whether the gripper can close on `object` of `world` with the TCP at `pose`: the parts of a
+    /// linkage other than its pads keep the held object's margin from the object (about to be
+    /// held: the margin kept between a held object and the arm) at every opening of the
+    /// closing, with the object as it stands and as the squeeze turns it
+    /// ([`Planner::linkage_clearance`]). Prismatic fingers always can (only their pads move).
+    fn check_closing(&self, world: &World, object: &str, pose: &Pose) -> Result<(), String> {
         let margin = self.model.margins().held;
-        match closing_clearance(self.robot, hand, q, width, &o.shape, &in_base) {
+        match self.linkage_clearance(world, object, pose) {
             Some(c) if c.clearance < margin => Err(format!(
                 "closing on {object}: {} comes within {:.1} mm of it (a held object keeps {:.1} mm)",
                 self.robot.links()[c.link].name,
