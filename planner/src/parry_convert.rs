@@ -117,10 +117,11 @@ pub fn object_shape(shape: &Shape, inflate: f64) -> (SharedShape, Pose) {
 
 /// Whether two parry shapes at the given (f64) poses touch or overlap.
 ///
-/// parry's intersection test alone reports some capsule–cuboid pairs millimetres apart as
-/// intersecting (the Panda hand's capsule 2.8 mm from a block, found by the RRT property test
-/// with seed 82996, while parry's distance and contact queries agree they are apart), so a
-/// positive is confirmed by the distance query. Negatives, the common case, cost nothing more.
+/// parry's single-precision intersection test alone reported some capsule–cuboid pairs
+/// millimetres apart as intersecting (the Panda hand's capsule 2.8 mm from a block, found by
+/// the RRT property test with seed 82996, while parry's distance and contact queries agreed
+/// they were apart), so a positive is confirmed by the certified distance: a pair is apart only
+/// where a separating slab is found. Negatives, the common case, cost nothing more.
 pub fn intersects(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> bool {
     let hit = parry3d_f64::query::intersection_test(&pose(pa), a.as_ref(), &pose(pb), b.as_ref())
         .is_ok_and(|r| r.intersecting);
