@@ -33,7 +33,9 @@ pub enum GoalStrategy {
     /// current configuration first), the end of a line the first drawn pose the line reaches. A trial's goal is then a random member of the TSR (of the
     /// part the arm can use), which is what verifying a TSR's width needs: with `Nominal`
     /// goals a wider TSR never changes the plan, so a trial would say nothing of the poses
-    /// the spec newly allows. `akl validate` and `akl relax` plan their trials this way.
+    /// the spec newly allows. `akl validate` and `akl relax` plan their trials this way. (The
+    /// planner may move a drawn grasp or release within its region before it is solved, to
+    /// where the hand and the held object fit: [`find_fitted_goals`].)
     Sampled,
 }
 

@@ -11,7 +11,9 @@
 //! - A `move_in_line` keyframe is reached by a straight TCP line from where the previous one
 //!   left the TCP to a pose of its TSR (see `line`). Any other keyframe is reached by a free
 //!   motion: goal configurations are sampled from its TSR (`goal`), RRT-Connect finds a path
-//!   (`rrt`) and shortcutting shortens it (`shortcut`).
+//!   (`rrt`) and shortcutting shortens it (`shortcut`). A grasp or release pose drawn from its
+//!   TSR is first moved within it to where a linkage's knuckles clear the object, or the held
+//!   object rests on its support (`fit`).
 //! - A grasp or release reached by free motion is approached along the tool's z axis from a
 //!   pose `approach_distance` back; the free motion ends there, fully checked. After a grasp
 //!   the object is lifted back along the same path, unless the next keyframe starts a line
