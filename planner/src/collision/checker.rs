@@ -391,8 +391,16 @@ impl<'a> Checker<'a> {
                     &placed_bodies[n.body],
                     &self.scene.obstacles[n.obstacle],
                 );
-                let exact = parry_convert::distance(&b.world_shape, &p.pose, &o.shape, &o.pose)
-                    .map_or(0.0, |d| d - DISTANCE_TOLERANCE);
+                // Beyond this distance the pair shortens nothing: GJK may stop there.
+                let reach = n.moved * pr.fraction - n.slack + DISTANCE_TOLERANCE;
+                let exact = parry_convert::distance_up_to(
+                    &b.world_shape,
+                    &p.pose,
+                    &o.shape,
+                    &o.pose,
+                    reach,
+                )
+                .map_or(0.0, |d| d - DISTANCE_TOLERANCE);
                 pr.limit(n.moved, n.slack + exact.max(n.gap));
             }
         }
@@ -506,7 +514,8 @@ pub(super) fn clear_of(
     if pr.settled(moved, slack) {
         return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
     }
-    match parry_convert::distance(shape, &placed.pose, &o.shape, &o.pose) {
+    let reach = moved * pr.fraction - slack + DISTANCE_TOLERANCE;
+    match parry_convert::distance_up_to(shape, &placed.pose, &o.shape, &o.pose, reach) {
         Some(d) if d > 0.0 => {
             pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
             true
