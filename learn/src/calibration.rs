@@ -196,15 +196,22 @@ pub enum CalibrationError {
     /// The logistic model's coefficients are unusable.
     #[error("beta1 must be positive and beta0 finite")]
     Coefficients,
-    /// The tank, filter or smoothing parameters are unusable.
-    #[error("0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0, filter_distance > 0 and 0 ≤ smoothing ≤ 1 s are required")]
+    /// The tank or smoothing parameters are unusable.
+    #[error("0 ≤ tank_dissipation < 1 (else the tank never fills), tank_threshold > 0 and 0 ≤ smoothing ≤ 1 s are required")]
     Tank,
+    /// The distance filter step is outside what the detector can use.
+    #[error("filter_distance {0} m is outside {min}..={max} m: a shorter step samples the hand's tremor rather than its path, and with a longer one no line shorter than 2·window steps is ever asked about", min = Calibration::FILTER_DISTANCES.start(), max = Calibration::FILTER_DISTANCES.end())]
+    FilterDistance(f64),
 }
 
 /// Fewest distance errors per demonstration for a meaningful fit.
 const MIN_POINTS: usize = 4;
 
 impl Calibration {
+    /// The distance filter steps a calibration may give (m): 1 mm to 10 cm, round the 1 cm the
+    /// detector was tuned at and the thesis's 5 cm ([`SAMPLING`]).
+    pub const FILTER_DISTANCES: std::ops::RangeInclusive<f64> = 0.001..=0.1;
+
     /// Pr(unconstrained | d) = σ(β0 + β1·d), the logistic model of eq. 3.3.
     pub fn probability_unconstrained(&self, d: f64) -> f64 {
         1.0 / (1.0 + (-(self.beta0 + self.beta1 * d)).exp())
@@ -368,10 +375,12 @@ impl Calibration {
         let usable = (0.0..1.0).contains(&self.tank_dissipation)
             && self.tank_threshold > 0.0
             && self.tank_threshold.is_finite()
-            && self.filter_distance > 0.0
             && (0.0..=1.0).contains(&self.smoothing);
         if !usable {
             return Err(CalibrationError::Tank);
+        }
+        if !Self::FILTER_DISTANCES.contains(&self.filter_distance) {
+            return Err(CalibrationError::FilterDistance(self.filter_distance));
         }
         Ok(())
     }
@@ -558,6 +567,16 @@ mod tests {
             ..Calibration::default()
         };
         assert_eq!(leaky.validate(), Err(CalibrationError::Tank));
+        for absurd in [0.0, -0.01, 1e-9, 0.5, 1e9, f64::NAN] {
+            let step = Calibration {
+                filter_distance: absurd,
+                ..Calibration::default()
+            };
+            assert!(
+                matches!(step.validate(), Err(CalibrationError::FilterDistance(d)) if d.to_bits() == absurd.to_bits()),
+                "{absurd}"
+            );
+        }
     }
 
     #[test]
