@@ -1,9 +1,8 @@
 //! `akl robot check` through the binary: the collision model holds every point of the real
 //! Panda's meshes, is not much bigger than them, and reports what it finds as documented.
 
-use akl_planner::enclosure::point_triangle_distance;
-use akl_planner::meshes::MeshRole;
-use akl_planner::Robot;
+use akl_planner::internals::point_triangle_distance;
+use akl_planner::{MeshRole, Robot};
 use akl_tsr::nalgebra::Point3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

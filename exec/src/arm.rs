@@ -21,8 +21,7 @@
 
 use crate::convert::{link_collider, to_sim};
 use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
-use akl_planner::fk::{Drive, Motion};
-use akl_planner::hand::{HandModel, LocalBox};
+use akl_planner::{Drive, HandModel, LocalBox, Motion};
 use akl_planner::{Geometry, Robot, ShapeRole};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;

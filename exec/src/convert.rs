@@ -2,7 +2,7 @@
 //! types, and back.
 
 use akl_mesh::ConvexHull;
-use akl_planner::parry_convert::cylinder_axis;
+use akl_planner::cylinder_axis;
 use akl_planner::Geometry;
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Quaternion, Translation3, UnitQuaternion, Vector3};

@@ -21,8 +21,7 @@
 use crate::arm::{PadReading, SimArm, LINK_FRICTION};
 use crate::convert::to_sim;
 use crate::world::{Owner, SimWorld};
-use akl_planner::hand::Finger;
-use akl_planner::squeeze::{squared_in_hand, squaring_turn};
+use akl_planner::{squared_in_hand, squaring_turn, Finger};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use rapier3d::parry::query::distance;
@@ -178,7 +177,7 @@ impl GraspMeasure {
 }
 
 /// Seats object `object` between the closed pads of `arm` as their squeeze does
-/// ([`akl_planner::squeeze`], the rule the planner's held model follows): turned about the
+/// ([`akl_planner::squared_in_hand`], the rule the planner's held model follows): turned about the
 /// hand's approach axis until it lies flat on the pads, and a cylinder held by its side stood
 /// up between them. Returns the turn about the approach axis (radians).
 pub(crate) fn square(sim: &mut SimWorld, arm: &SimArm, object: usize) -> f64 {

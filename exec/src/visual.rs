@@ -3,7 +3,7 @@
 //! beside the collision model that was checked.
 
 use akl_foxglove::{Model, SceneEntity, SceneUpdate, Vector3};
-use akl_planner::meshes::MeshRole;
+use akl_planner::MeshRole;
 use akl_planner::Robot;
 use akl_tsr::Pose;
 use base64::Engine as _;

@@ -1,14 +1,14 @@
-//! A URDF: `urdf_load::parse` (urdf-rs and the checks for what k cannot take) and, for a URDF
+//! A URDF: `akl_planner::parse_urdf` (urdf-rs and the checks for what k cannot take) and, for a URDF
 //! it accepts, the kinematic tree `Robot::load` builds from it.
 #![no_main]
 
-use akl_planner::urdf_load;
+use akl_planner::{parse_urdf, urdf_chain};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        if let Ok(robot) = urdf_load::parse(text) {
-            let _ = urdf_load::chain(&robot);
+        if let Ok(robot) = parse_urdf(text) {
+            let _ = urdf_chain(&robot);
         }
     }
 });

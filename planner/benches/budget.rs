@@ -9,8 +9,7 @@
 //! keyframe. Criterion times `plan_best` on each ground truth at a 200 ms budget.
 //! Run with `cargo bench -p akl-planner --bench budget`.
 
-use akl_planner::options::MS_PER_KEYFRAME;
-use akl_planner::{plan_best, PlanBudget, PlanOptions, Robot};
+use akl_planner::{plan_best, PlanBudget, PlanOptions, Robot, MS_PER_KEYFRAME};
 use akl_scene::builtin;
 use akl_tsr::TaskSpec;
 use criterion::{black_box, Criterion};

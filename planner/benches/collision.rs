@@ -8,7 +8,8 @@
 
 use akl_planner::collision::{Checker, RobotCollision, Scene};
 use akl_planner::contact_rules::Allowances;
-use akl_planner::{parry_convert, Robot};
+use akl_planner::internals::{intersects, object_shape, robot_shape};
+use akl_planner::Robot;
 use akl_scene::builtin;
 use akl_tsr::Pose;
 use criterion::{black_box, Criterion};
@@ -39,16 +40,16 @@ impl<'a> Naive<'a> {
                 c.arm_margin
             };
             for s in &link.shapes {
-                let (shape, fix) = parry_convert::robot_shape(&s.geometry, margin);
+                let (shape, fix) = robot_shape(&s.geometry, margin);
                 shapes.push((link.name.clone(), shape, s.origin * fix));
-                self_shapes.push(parry_convert::robot_shape(&s.geometry, 0.5 * c.self_margin).0);
+                self_shapes.push(robot_shape(&s.geometry, 0.5 * c.self_margin).0);
             }
         }
         let obstacles = world
             .objects
             .iter()
             .map(|o| {
-                let (shape, fix) = parry_convert::object_shape(&o.shape, 0.0);
+                let (shape, fix) = object_shape(&o.shape, 0.0);
                 (shape, o.pose * fix)
             })
             .collect();
@@ -102,7 +103,7 @@ impl<'a> Naive<'a> {
             })
             .collect();
         for &(i, j) in &self.pairs {
-            if parry_convert::intersects(
+            if intersects(
                 &self.self_shapes[i],
                 &poses[i],
                 &self.self_shapes[j],
@@ -116,7 +117,7 @@ impl<'a> Naive<'a> {
                 if m == 0 && self.mount.contains(link) {
                     continue;
                 }
-                if parry_convert::intersects(shape, &poses[k], o, pose) {
+                if intersects(shape, &poses[k], o, pose) {
                     return false;
                 }
             }

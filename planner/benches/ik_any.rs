@@ -10,9 +10,8 @@
 //! `cargo bench -p akl-planner --bench ik_any`; `IK_POSES=N` changes the pose count
 //! (default 2,000).
 
-use akl_planner::fk::{Kinematics, UrdfJoints};
-use akl_planner::ik::TracIk;
-use akl_planner::urdf_load;
+use akl_planner::internals::{TracIk, UrdfJoints};
+use akl_planner::{parse_urdf, urdf_chain, Kinematics};
 use akl_tsr::Pose;
 use criterion::{black_box, Criterion};
 use k::InverseKinematicsSolver;
@@ -33,8 +32,8 @@ struct Arm {
 
 fn arm(name: &'static str, urdf: &Path, tcp: &str, fingers: &[&str]) -> Arm {
     let text = std::fs::read_to_string(urdf).unwrap_or_else(|e| panic!("{}: {e}", urdf.display()));
-    let robot = urdf_load::parse(&text).expect("the URDF parses");
-    let chain = urdf_load::chain(&robot);
+    let robot = parse_urdf(&text).expect("the URDF parses");
+    let chain = urdf_chain(&robot);
     let fingers: Vec<String> = fingers.iter().map(|f| f.to_string()).collect();
     let (kin, joints) = Kinematics::compile(&chain, tcp, &fingers, &UrdfJoints::of(&robot))
         .expect("the arm compiles");

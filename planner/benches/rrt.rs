@@ -17,9 +17,8 @@
 
 use akl_planner::collision::{Checker, RobotCollision, Scene};
 use akl_planner::contact_rules::Allowances;
-use akl_planner::rrt::{rrt_connect, RrtOptions, RrtResult};
-use akl_planner::space::{distance, Space};
-use akl_planner::{plan_task, PlanOptions, Robot};
+use akl_planner::internals::{distance, rrt_connect, RrtResult, Space};
+use akl_planner::{plan_task, PlanOptions, Robot, RrtOptions};
 use akl_scene::{builtin, Object, Shape, World};
 use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
 use akl_tsr::{Pose, WORLD_FRAME};

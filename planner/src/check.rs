@@ -11,7 +11,7 @@ use std::fmt;
 
 /// Settings of [`recheck`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RecheckOptions {
+pub(crate) struct RecheckOptions {
     /// Time between samples (seconds).
     pub dt: f64,
     /// Fraction of each margin that must stay clear (the planner guarantees one half).
@@ -35,7 +35,7 @@ impl Default for RecheckOptions {
 
 /// A problem found in a plan, with the time and segment where it occurs.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Violation {
+pub(crate) struct Violation {
     /// Seconds from the start of the plan.
     pub t: f64,
     /// Index of the segment.
@@ -80,7 +80,7 @@ fn held_during(world: &World, plan: &Plan, segment: &Segment, margin: f64) -> Op
 
 /// Every violation found when sampling `plan` every `options.dt` seconds in `world` (the
 /// world the plan was made for).
-pub fn recheck(
+pub(crate) fn recheck(
     robot: &Robot,
     world: &World,
     plan: &Plan,

@@ -51,7 +51,7 @@ pub struct MountConfig {
 
 impl MountConfig {
     /// The pose of the URDF's root link in the task's robot base frame.
-    pub fn pose(&self) -> akl_tsr::Pose {
+    pub(crate) fn pose(&self) -> akl_tsr::Pose {
         akl_tsr::pose::pose_from_xyz_rpy(self.xyz, self.rpy)
     }
 }

@@ -38,7 +38,7 @@ pub struct Allowances {
 
 impl Allowances {
     /// Whether nothing is allowed.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.hand_may_touch.is_empty()
             && self.held_may_touch.is_empty()
             && self.held_may_brush.is_empty()

@@ -21,18 +21,20 @@ use std::sync::Arc;
 
 /// Longest triangle edge the capsule fitter sees (metres): a triangle must lie in one
 /// capsule, and cutting long slivers lets the fit follow the shape.
-pub const MAX_EDGE: f64 = 0.01;
+pub(crate) const MAX_EDGE: f64 = 0.01;
 
 /// The grown hull holding `meshes` (all of one link, in its frame), as a collision shape;
-/// `None` when the meshes span no volume. The hull is simplified to [`HULL_TOLERANCE`].
-pub fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
+/// `None` when the meshes span no volume. The hull is simplified to [`HULL_TOLERANCE`] (the
+/// tests' default; robots choose a tolerance per link through [`enclose_within`]).
+#[cfg(test)]
+pub(crate) fn enclose(meshes: &[&LinkMesh]) -> Option<LinkShape> {
     enclose_within(meshes, HULL_TOLERANCE)
 }
 
-/// [`enclose`] with the hull simplified until the dropped vertices reach at most `tolerance`
+/// `enclose` with the hull simplified until the dropped vertices reach at most `tolerance`
 /// beyond it (or [`MAX_HULL_VERTICES`] are kept): the border, which grows the hull in every
 /// direction, is then about that small.
-pub fn enclose_within(meshes: &[&LinkMesh], tolerance: f64) -> Option<LinkShape> {
+pub(crate) fn enclose_within(meshes: &[&LinkMesh], tolerance: f64) -> Option<LinkShape> {
     let collision: Vec<&LinkMesh> = meshes
         .iter()
         .copied()
@@ -89,11 +91,11 @@ type Polytope = (Vec<Point3<f64>>, Vec<[u32; 3]>);
 /// (BENCHMARKS.md, "The real Panda's geometry"): keeping every vertex (up to 152) made a
 /// full-arm check 4.4 µs; 16, 24, 32 and 48 cost 2.6–3.2 µs alike while the model's mean
 /// stand-off fell from 8.4 to 2.8 mm, so 48.
-pub const MAX_HULL_VERTICES: usize = 48;
+pub(crate) const MAX_HULL_VERTICES: usize = 48;
 
 /// How far the dropped vertices may reach beyond the kept ones' hull before more are kept
 /// (metres).
-pub const HULL_TOLERANCE: f64 = 0.002;
+pub(crate) const HULL_TOLERANCE: f64 = 0.002;
 
 /// [`HULL_TOLERANCE`] for the links a revolute gripper joint swings (a linkage's knuckles,
 /// bars and fingertips, such as the Robotiq 2F-85's): they pass within millimetres of what the
@@ -102,7 +104,7 @@ pub const HULL_TOLERANCE: f64 = 0.002;
 /// and grew 1.7–2.1 mm) forbids grasps the real linkage clears. At 0.25 mm they keep 35–48
 /// vertices and grow 0.7–1.0 mm (what is left is mostly the visual meshes reaching past the
 /// collision meshes). Prismatic fingers are not swung: the Panda's hulls are unchanged.
-pub const LINKAGE_HULL_TOLERANCE: f64 = 0.000_25;
+pub(crate) const LINKAGE_HULL_TOLERANCE: f64 = 0.000_25;
 
 /// A hull of a subset of the convex polytope `vertices`: starting from the extreme vertices in
 /// 14 directions, the vertex furthest outside the current hull is added until none is further
@@ -196,7 +198,7 @@ fn outside_distance(p: &Point3<f64>, faces: &[[Point3<f64>; 3]]) -> f64 {
 
 /// The triangles cut (halving the longest edge, again and again) until no edge is longer
 /// than `max_edge`: the pieces cover exactly the same surface.
-pub fn subdivided(
+pub(crate) fn subdivided(
     triangles: impl Iterator<Item = [Point3<f64>; 3]>,
     max_edge: f64,
 ) -> Vec<[Point3<f64>; 3]> {
@@ -226,7 +228,7 @@ pub fn subdivided(
 }
 
 /// The frame of a capsule: centred on its segment, z along it.
-pub fn capsule_frame(c: &Capsule) -> Pose {
+pub(crate) fn capsule_frame(c: &Capsule) -> Pose {
     let axis = c.b - c.a;
     let rotation = if axis.norm() > 0.0 {
         UnitQuaternion::rotation_between(&Vector3::z(), &axis).unwrap_or_else(|| {
@@ -302,7 +304,8 @@ pub fn stand_off(shape: &LinkShape, meshes: &[&LinkMesh], spacing: f64) -> Optio
 
 /// The capsule that holds a shape, in the link frame: the capsule itself, or a grown hull's
 /// holding capsule.
-pub fn shape_capsule(s: &LinkShape) -> Option<Capsule> {
+#[cfg(test)]
+pub(crate) fn shape_capsule(s: &LinkShape) -> Option<Capsule> {
     let (radius, half_length) = match &s.geometry {
         Geometry::Capsule { radius, length } => (*radius, 0.5 * length),
         Geometry::RoundHull(h) => (h.radius, h.half_length),

@@ -88,7 +88,7 @@ pub struct Kinematics {
 pub struct ArmJoints {
     /// Names, base to tip.
     pub names: Vec<String>,
-    /// `[lower, upper]` limits; a continuous joint's are [`CONTINUOUS_RANGE`].
+    /// `[lower, upper]` limits; a continuous joint's are `[-2π, 2π]` (`CONTINUOUS_RANGE`).
     pub limits: Vec<[f64; 2]>,
     /// Whether each is revolute (else prismatic).
     pub revolute: Vec<bool>,
@@ -100,18 +100,18 @@ pub struct ArmJoints {
 }
 
 /// Mimic relations read from the URDF: joint → (followed joint, multiplier, offset).
-pub type Mimics = BTreeMap<String, (String, f64, f64)>;
+pub(crate) type Mimics = BTreeMap<String, (String, f64, f64)>;
 
 /// The range planned over for a continuous joint: a turn either way of zero (as UR's own
 /// descriptions bound their joints), so that every angle lies in it twice and from anywhere
 /// in it every angle is within half a turn. The joint itself has no limit: inverse
 /// kinematics answers the turn nearest its seed, and `akl robot info` marks the joint
 /// continuous.
-pub const CONTINUOUS_RANGE: [f64; 2] = [-std::f64::consts::TAU, std::f64::consts::TAU];
+pub(crate) const CONTINUOUS_RANGE: [f64; 2] = [-std::f64::consts::TAU, std::f64::consts::TAU];
 
 /// How far a joint may move, as its URDF says.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum JointRange {
+pub(crate) enum JointRange {
     /// A revolute or prismatic joint's `<limit lower upper>`.
     Bounded([f64; 2]),
     /// A continuous joint: no limit.
@@ -124,9 +124,9 @@ pub enum JointRange {
 #[derive(Debug, Clone, Default)]
 pub struct UrdfJoints {
     /// Mimic relations.
-    pub mimics: Mimics,
+    pub(crate) mimics: Mimics,
     /// The range of every movable joint, by name.
-    pub ranges: BTreeMap<String, JointRange>,
+    pub(crate) ranges: BTreeMap<String, JointRange>,
 }
 
 impl UrdfJoints {
@@ -369,12 +369,12 @@ impl Kinematics {
     }
 
     /// Index of the TCP link.
-    pub fn tcp_index(&self) -> usize {
+    pub(crate) fn tcp_index(&self) -> usize {
         self.tcp
     }
 
     /// Index of the link named `name`.
-    pub fn link_index(&self, name: &str) -> Option<usize> {
+    pub(crate) fn link_index(&self, name: &str) -> Option<usize> {
         self.links.iter().position(|l| l.name == name)
     }
 
@@ -384,7 +384,7 @@ impl Kinematics {
     }
 
     /// Indices of the links moved by each arm joint (the joint's child link), in arm order.
-    pub fn arm_links(&self) -> &[usize] {
+    pub(crate) fn arm_links(&self) -> &[usize] {
         &self.arm_links
     }
 
@@ -403,7 +403,8 @@ impl Kinematics {
     }
 
     /// The linkage's map from pad gap to knuckle angle, if the gripper is a linkage.
-    pub fn width_map(&self) -> Option<&[[f64; 2]]> {
+    #[cfg(test)]
+    pub(crate) fn width_map(&self) -> Option<&[[f64; 2]]> {
         self.width_map.as_deref()
     }
 
@@ -481,7 +482,7 @@ impl Kinematics {
 
     /// The TCP pose and its geometric Jacobian (rows: linear then angular velocity in the base
     /// frame; one column per arm joint).
-    pub fn tcp_jacobian(&self, q: &[f64]) -> (Pose, Matrix6xX<f64>) {
+    pub(crate) fn tcp_jacobian(&self, q: &[f64]) -> (Pose, Matrix6xX<f64>) {
         let mut frames = Vec::with_capacity(self.tcp_path.len());
         let mut pose = Pose::identity();
         for &i in &self.tcp_path {

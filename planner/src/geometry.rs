@@ -34,7 +34,7 @@ pub enum Geometry {
         /// Radius (metres).
         radius: f64,
     },
-    /// A convex hull grown by a border: what encloses a link's meshes ([`crate::enclosure`]).
+    /// A convex hull grown by a border: what encloses a link's meshes (`enclosure`).
     RoundHull(#[serde(serialize_with = "hull_summary")] Arc<RoundHull>),
 }
 
@@ -85,7 +85,7 @@ pub enum ShapeRole {
     /// A URDF primitive (box, capsule, cylinder, sphere), simulated as it is: the fingers'
     /// pads and boxes grasp with these.
     Exact,
-    /// A hull grown to hold the link's collision and visual meshes ([`crate::enclosure`]):
+    /// A hull grown to hold the link's collision and visual meshes (`enclosure`):
     /// the planner and the simulation's contact verdicts use it so that whatever touches the
     /// real link touches the model.
     Enclosure,
@@ -94,7 +94,7 @@ pub enum ShapeRole {
 impl Geometry {
     /// Converts a k collision geometry: `Some(None)` for a mesh (enclosed by a grown hull
     /// instead, see [`crate::enclosure`]), `None` for a size of zero or less.
-    pub fn from_k(geometry: &k::link::Geometry<f64>) -> Option<Option<Self>> {
+    pub(crate) fn from_k(geometry: &k::link::Geometry<f64>) -> Option<Option<Self>> {
         let g = match geometry {
             k::link::Geometry::Capsule { radius, length } => Geometry::Capsule {
                 radius: *radius,
@@ -128,7 +128,7 @@ impl Geometry {
     }
 
     /// Radius of the smallest sphere about the shape's origin that contains it.
-    pub fn bounding_radius(&self) -> f64 {
+    pub(crate) fn bounding_radius(&self) -> f64 {
         match *self {
             Geometry::Capsule { radius, length } => 0.5 * length + radius,
             Geometry::Box { size } => 0.5 * (size[0].hypot(size[1])).hypot(size[2]),

@@ -66,7 +66,7 @@ impl Default for GoalOptions {
 
 /// An accepted goal: the TCP pose, its configuration, and what the caller's test returned.
 #[derive(Debug, Clone)]
-pub struct Candidate<T> {
+pub(crate) struct Candidate<T> {
     /// TCP pose in the world.
     pub pose: Pose,
     /// Arm configuration reaching it.
@@ -77,7 +77,7 @@ pub struct Candidate<T> {
 
 /// Why no goal was found.
 #[derive(Debug, Clone, PartialEq)]
-pub enum GoalFailure {
+pub(crate) enum GoalFailure {
     /// No pose tried had an IK solution.
     Unreachable {
         /// Poses tried.
@@ -96,7 +96,7 @@ pub enum GoalFailure {
 
 /// The poses to try: the TSR's nominal pose (or the nearest member, when the bounds exclude
 /// it), then uniform samples; with [`GoalStrategy::Sampled`], uniform samples only.
-pub fn tsr_poses<R: Rng + ?Sized>(
+pub(crate) fn tsr_poses<R: Rng + ?Sized>(
     tsr: &Tsr,
     count: usize,
     strategy: GoalStrategy,
@@ -148,8 +148,10 @@ pub fn keyframe_stream(seed: u64, kf: &Keyframe) -> ChaCha8Rng {
 /// first. With [`GoalStrategy::Spread`] poses are drawn `enough` at a time and their IK
 /// branches tried quickest to reach from `seed` first, until `enough` candidates are found,
 /// quickest first. With [`GoalStrategy::Sampled`] only the candidates of the first drawn pose
-/// that yields any are returned, nearest `seed` first.
-pub fn find_goals<T, R: Rng + ?Sized>(
+/// that yields any are returned, nearest `seed` first. (The planner fits its poses: it calls
+/// `find_fitted_goals`; the tests call this.)
+#[cfg(test)]
+pub(crate) fn find_goals<T, R: Rng + ?Sized>(
     robot: &Robot,
     tsr: &Tsr,
     base: &Pose,
@@ -161,12 +163,12 @@ pub fn find_goals<T, R: Rng + ?Sized>(
     find_fitted_goals(robot, tsr, base, seed, options, rng, |p| *p, accept)
 }
 
-/// [`find_goals`] with each pose moved by `fit` before inverse kinematics: the caller moves a
+/// `find_goals` with each pose moved by `fit` before inverse kinematics: the caller moves a
 /// drawn pose (within the region) to where it can be used, or returns it as it is (the
 /// planner's grasps and releases, see `task::fit`). Each pose is fitted once, when its turn
 /// comes, so poses never tried cost nothing.
 #[allow(clippy::too_many_arguments)]
-pub fn find_fitted_goals<T, R: Rng + ?Sized>(
+pub(crate) fn find_fitted_goals<T, R: Rng + ?Sized>(
     robot: &Robot,
     tsr: &Tsr,
     base: &Pose,
@@ -253,7 +255,7 @@ pub fn find_fitted_goals<T, R: Rng + ?Sized>(
 
 /// Seconds of the fastest rest-to-rest straight joint-space move from `a` to `b`: a lower
 /// bound on any motion between them, used to rank goals.
-pub fn move_time(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn move_time(robot: &Robot, a: &[f64], b: &[f64]) -> f64 {
     timing::linear(
         &[a.to_vec(), b.to_vec()],
         robot.velocity_limits(),

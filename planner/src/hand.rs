@@ -218,13 +218,15 @@ pub struct HandModel {
     pub palm: Option<LocalBox>,
     /// The links a linkage gripper moves as it closes, but for the two fingertips (the
     /// 2F-85's knuckles, finger links and inner knuckles); none for prismatic fingers. The
-    /// simulation gives them all their collision shapes: see [`closing_clearance`].
+    /// simulation gives them all their collision shapes, and the planner keeps their closing
+    /// sweep clear of what a grasp closes on (`closing_clearance`).
     pub linkage: Vec<usize>,
 }
 
 impl HandModel {
-    /// The hand of `robot`, or `None` when the simulation cannot drive its gripper (see
-    /// [`HandModel::build`] for why).
+    /// The hand of `robot`, or `None` when the simulation cannot drive its gripper: it drives
+    /// two prismatic fingers on one link or a linkage whose knuckle moves two fingertips, and
+    /// [`Robot::load`] refuses any other gripper with a [`GripperError`] saying why.
     pub fn new(robot: &Robot) -> Option<HandModel> {
         HandModel::build(robot).ok()
     }
@@ -232,7 +234,7 @@ impl HandModel {
     /// The hand of `robot`, or why the simulation cannot drive its gripper: it drives two
     /// prismatic fingers on one link, each with a primitive collision element to grasp with,
     /// or a linkage whose knuckle moves two fingertips (pads: their collision meshes' bounds).
-    pub fn build(robot: &Robot) -> Result<HandModel, GripperError> {
+    pub(crate) fn build(robot: &Robot) -> Result<HandModel, GripperError> {
         let links = robot.links();
         let linkage = linkage_fingers(robot)?;
         let (a, b, palm_link) = match linkage {
@@ -376,7 +378,7 @@ impl HandModel {
 
     /// The boxes of the hand as (link, geometry, pose in the link frame): the palm and each
     /// pad.
-    pub fn boxes(&self) -> Vec<(usize, Geometry, Pose)> {
+    pub(crate) fn boxes(&self) -> Vec<(usize, Geometry, Pose)> {
         let palm = self.palm.map(|p| (self.palm_link, p));
         let pads = self.fingers.iter().map(|f| (f.link, f.pad));
         palm.into_iter()
@@ -391,7 +393,7 @@ impl HandModel {
 
 /// The furthest (metres) a point of a linkage moves between two consecutive openings at which
 /// its closing is checked ([`HandModel::closing_openings`]).
-pub const SWEEP_STEP: f64 = 0.001;
+pub(crate) const SWEEP_STEP: f64 = 0.001;
 
 /// At most this many intervals between the openings at which a closing is checked.
 const MAX_SWEEP_INTERVALS: usize = 1024;
@@ -399,7 +401,7 @@ const MAX_SWEEP_INTERVALS: usize = 1024;
 /// How close a linkage comes to an object while the gripper closes on it
 /// ([`closing_clearance`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ClosingClearance {
+pub(crate) struct ClosingClearance {
     /// The linkage link that comes closest (robot link index).
     pub link: usize,
     /// The least distance between it and the object over the whole closing (metres; 0 or less
@@ -410,7 +412,7 @@ pub struct ClosingClearance {
 impl HandModel {
     /// The collision shapes of the linkage ([`HandModel::linkage`]) as (link, geometry, pose
     /// in the link frame): every shape of those links, as the simulation has them.
-    pub fn linkage_shapes<'r>(&self, robot: &'r Robot) -> Vec<(usize, &'r Geometry, Pose)> {
+    pub(crate) fn linkage_shapes<'r>(&self, robot: &'r Robot) -> Vec<(usize, &'r Geometry, Pose)> {
         self.linkage
             .iter()
             .flat_map(|&i| {
@@ -427,7 +429,7 @@ impl HandModel {
     /// (metres): evenly spaced, as many as it takes for that to be at most [`SWEEP_STEP`] (at
     /// most 1024 intervals). A rigid motion moves no point of a shape further than it moves
     /// one of the corners of the shape's bounding box, so the corners bound every point.
-    pub fn closing_openings(
+    pub(crate) fn closing_openings(
         &self,
         robot: &Robot,
         q: &[f64],
@@ -490,7 +492,7 @@ impl HandModel {
 /// The pads close on what they grasp, and the contact rules let the hand touch it; a
 /// linkage's other parts (the 2F-85's inner knuckles swing in above the pads as it closes)
 /// must not press it, which the planner checks with this before it takes a grasp.
-pub fn closing_clearance(
+pub(crate) fn closing_clearance(
     robot: &Robot,
     hand: &HandModel,
     q: &[f64],

@@ -35,7 +35,7 @@ impl Default for LineOptions {
 
 /// Why a line cannot be followed; `at` is the fraction of the line (0 to 1).
 #[derive(Debug, Clone, PartialEq)]
-pub enum LineFailure {
+pub(crate) enum LineFailure {
     /// No configuration within the joint limits reaches the pose there.
     LeavesWorkspace {
         /// Fraction of the line.
@@ -97,7 +97,7 @@ pub fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>)
 /// `move_in_line` constrains where the TCP goes, not when it turns; a held object that must
 /// enter a tight opening square to it (the assembly's pipe, grasped a few degrees off its
 /// perceived pose) enters it only if the turn is over before it gets there.
-pub const TURN_PROFILES: [f64; 3] = [1.0, 0.5, 0.25];
+pub(crate) const TURN_PROFILES: [f64; 3] = [1.0, 0.5, 0.25];
 
 /// Turns smaller than this (radians) are planned evenly only: every profile gives the same line.
 const NEGLIGIBLE_TURN: f64 = 1e-3;
@@ -106,7 +106,7 @@ const NEGLIGIBLE_TURN: f64 = 1e-3;
 /// straight line, both world poses; `base` is the robot base pose in the world. The TCP turns
 /// evenly along the line, or, when that collides, faster at its start ([`TURN_PROFILES`]); the
 /// first profile's failure is the one reported when none plans.
-pub fn plan_line(
+pub(crate) fn plan_line(
     space: &Space,
     start: &[f64],
     from: &Pose,
@@ -231,7 +231,7 @@ impl Line<'_> {
 
 /// The pose a fraction `s` of the way from `a` to `b` (position lerp, orientation slerp), with
 /// the turn done at fraction `turn_by` of the way.
-pub fn interpolate_turning(a: &Pose, b: &Pose, s: f64, turn_by: f64) -> Option<Pose> {
+pub(crate) fn interpolate_turning(a: &Pose, b: &Pose, s: f64, turn_by: f64) -> Option<Pose> {
     let p = a.translation.vector.lerp(&b.translation.vector, s);
     let r = a
         .rotation

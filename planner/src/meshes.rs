@@ -39,12 +39,12 @@ pub struct LinkMesh {
 }
 
 /// Mesh files built into the binary, by their path relative to the robot folder.
-pub type EmbeddedFiles = &'static [(&'static str, &'static [u8])];
+pub(crate) type EmbeddedFiles = &'static [(&'static str, &'static [u8])];
 
 /// Where mesh files are found: the robot folder (on disk or embedded), the URDF's folder
 /// and the package folders.
 #[derive(Debug, Clone)]
-pub struct MeshFiles {
+pub(crate) struct MeshFiles {
     /// The robot folder; paths below it are read from `embedded` when that is given.
     robot_dir: PathBuf,
     /// The URDF's folder, for relative file names.
@@ -84,7 +84,7 @@ impl MeshFiles {
     /// Mesh files of the robot folder `robot_dir` whose URDF lies in `urdf_dir`: the package
     /// folders given first, then the folder's own `[packages]` (relative to it), then
     /// `ROS_PACKAGE_PATH`.
-    pub fn new(
+    pub(crate) fn new(
         robot_dir: &Path,
         urdf_dir: &Path,
         given: &[PackagePath],
@@ -188,7 +188,7 @@ fn normalize(path: &Path) -> PathBuf {
 
 /// Every mesh element of the URDF's links, read and placed in its link's frame. The error
 /// lists every mesh that cannot be read, not only the first.
-pub fn read_link_meshes(
+pub(crate) fn read_link_meshes(
     urdf: &urdf_rs::Robot,
     kin: &Kinematics,
     files: &MeshFiles,

@@ -26,7 +26,7 @@ pub struct PlanBudget {
 
 impl PlanBudget {
     /// One candidate: the nominal-first plan.
-    pub const SINGLE: PlanBudget = PlanBudget { candidates: 1 };
+    pub(crate) const SINGLE: PlanBudget = PlanBudget { candidates: 1 };
 
     /// A budget of `candidates` candidates (at least one).
     pub fn candidates(candidates: usize) -> PlanBudget {
@@ -86,7 +86,7 @@ pub struct PlanOptions {
 impl PlanOptions {
     /// The joint velocity and acceleration limits the plan is timed with: the robot's,
     /// scaled by [`PlanOptions::speed_scale`] and its square.
-    pub fn limits(&self, robot: &Robot) -> (Vec<f64>, Vec<f64>) {
+    pub(crate) fn limits(&self, robot: &Robot) -> (Vec<f64>, Vec<f64>) {
         let scale = |v: &[f64], by: f64| v.iter().map(|x| x * by).collect();
         let s = self.speed_scale;
         (

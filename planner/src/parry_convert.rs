@@ -15,7 +15,7 @@ use parry3d_f64::shape::SharedShape;
 use std::f64::consts::FRAC_PI_2;
 
 /// A pose as parry's pose.
-pub fn pose(p: &Pose) -> ParryPose {
+pub(crate) fn pose(p: &Pose) -> ParryPose {
     let t = p.translation.vector;
     let q = p.rotation.quaternion().coords;
     ParryPose::from_parts(
@@ -136,14 +136,14 @@ pub fn intersects(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> boo
 /// is the gap between the two shapes' supports along the direction of GJK's closest points, the
 /// width of a separating slab, which is at most the distance and equals it when GJK has
 /// converged.
-pub fn distance(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
+pub(crate) fn distance(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
     distance_up_to(a, pa, b, pb, f64::MAX)
 }
 
 /// [`distance`] for a caller that needs to know it only up to `reach`: where the shapes are
 /// further apart than that, `reach` itself, which GJK proves with a separating slab as soon as
 /// it finds one that wide, without converging on the distance.
-pub fn distance_up_to(
+pub(crate) fn distance_up_to(
     a: &SharedShape,
     pa: &Pose,
     b: &SharedShape,
@@ -177,7 +177,7 @@ pub fn distance_up_to(
 
 /// How deep two parry shapes at the given (f64) poses interpenetrate (metres; 0 when apart or
 /// touching); `None` if parry has no contact query for the pair.
-pub fn penetration(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
+pub(crate) fn penetration(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {
     parry3d_f64::query::contact(&pose(pa), a.as_ref(), &pose(pb), b.as_ref(), 0.0)
         .ok()
         .map(|c| c.map_or(0.0, |c| (-c.dist).max(0.0)))

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The `akl_plan` version this build reads and writes.
-pub const PLAN_VERSION: u32 = 1;
+pub(crate) const PLAN_VERSION: u32 = 1;
 
 /// What a segment does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -120,7 +120,7 @@ pub struct GripperEvent {
 /// A planned task: the timed trajectory of the arm joints and the gripper events.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
-    /// Format version; always [`PLAN_VERSION`].
+    /// Format version; always 1 (`PLAN_VERSION`).
     pub akl_plan: u32,
     /// The task planned.
     pub task: String,
@@ -139,9 +139,10 @@ pub struct Plan {
 }
 
 /// Why a plan file cannot be read.
+#[cfg(test)]
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum PlanFileError {
+pub(crate) enum PlanFileError {
     /// The text is not JSON of the plan format (serde's message names line and column).
     #[error("{0}")]
     Json(#[from] serde_json::Error),
@@ -152,7 +153,7 @@ pub enum PlanFileError {
 
 impl Plan {
     /// The segment running at time `t` (clamped to the plan).
-    pub fn segment_at(&self, t: f64) -> Option<&Segment> {
+    pub(crate) fn segment_at(&self, t: f64) -> Option<&Segment> {
         let i = self.segments.partition_point(|s| s.end < t);
         self.segments.get(i).or_else(|| self.segments.last())
     }
@@ -188,7 +189,7 @@ impl Plan {
 
     /// Total joint-space length of the arm's motion (radians, Euclidean over the joints),
     /// summed over the segments' waypoints.
-    pub fn joint_path_length(&self) -> f64 {
+    pub(crate) fn joint_path_length(&self) -> f64 {
         self.segments
             .iter()
             .map(|s| crate::space::path_length(&s.waypoints))
@@ -196,12 +197,14 @@ impl Plan {
     }
 
     /// The plan as pretty JSON.
-    pub fn to_json(&self) -> serde_json::Result<String> {
+    pub(crate) fn to_json(&self) -> serde_json::Result<String> {
         akl_tsr::io::to_readable_json(self)
     }
 
-    /// Parses a plan; the error names the line and column.
-    pub fn from_json(text: &str) -> Result<Plan, PlanFileError> {
+    /// Parses a plan; the error names the line and column (the tests' round trip: nothing
+    /// else reads plan files).
+    #[cfg(test)]
+    pub(crate) fn from_json(text: &str) -> Result<Plan, PlanFileError> {
         let plan: Plan = serde_json::from_str(text)?;
         if plan.akl_plan != PLAN_VERSION {
             return Err(PlanFileError::Version(plan.akl_plan));

@@ -23,9 +23,9 @@ macro_rules! panda_mesh {
 }
 
 /// The Panda's `robot.toml`, embedded so the binary works from any directory.
-pub const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");
+pub(crate) const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");
 /// The Panda's URDF (franka_description's `fer.urdf`), embedded.
-pub const PANDA_URDF: &str = include_str!("../../robots/panda/fer.urdf");
+pub(crate) const PANDA_URDF: &str = include_str!("../../robots/panda/fer.urdf");
 
 /// The Panda's meshes, embedded, by their path in `robots/panda`.
 const PANDA_MESHES: EmbeddedFiles = &[
@@ -120,7 +120,7 @@ enum GripperCheck {
 }
 
 /// Distinct-solution spacing used by [`Robot::ik_solutions`] callers by default (radians).
-pub const SOLUTION_SPACING: f64 = 0.1;
+pub(crate) const SOLUTION_SPACING: f64 = 0.1;
 
 /// A loaded robot. Poses taken and returned are in the robot's base frame; joint vectors are
 /// arm configurations in [`Robot::joint_names`] order.
@@ -149,7 +149,7 @@ impl Robot {
     }
 
     /// The built-in Panda with another `robot.toml` (e.g. another IK solver or margins).
-    pub fn panda_with(toml_text: &str) -> Result<Robot, RobotError> {
+    pub(crate) fn panda_with(toml_text: &str) -> Result<Robot, RobotError> {
         Robot::build(
             toml_text,
             Path::new("robots/panda/robot.toml"),
@@ -201,8 +201,9 @@ impl Robot {
     }
 
     /// Builds a robot from the texts of its `robot.toml` and URDF; the paths name them in
-    /// errors and locate the URDF's meshes on disk.
-    pub fn from_texts(
+    /// errors and locate the URDF's meshes on disk (the tests of stock-URDF quirks).
+    #[cfg(test)]
+    pub(crate) fn from_texts(
         toml_text: &str,
         toml_path: &Path,
         urdf_text: &str,
@@ -456,11 +457,6 @@ impl Robot {
         self.kin.tcp_index()
     }
 
-    /// Index of the flange link in [`Robot::links`].
-    pub fn flange_link(&self) -> usize {
-        self.flange
-    }
-
     /// Indices of the hand links (hand and fingers).
     pub fn hand_links(&self) -> &[usize] {
         &self.hand_links
@@ -472,7 +468,7 @@ impl Robot {
     }
 
     /// Link index pairs never checked against each other.
-    pub fn allowed_pairs(&self) -> &[(usize, usize)] {
+    pub(crate) fn allowed_pairs(&self) -> &[(usize, usize)] {
         &self.allowed_pairs
     }
 
@@ -482,8 +478,8 @@ impl Robot {
         &self.arm.fingers
     }
 
-    /// Whether each arm joint is continuous (turns without end; planned over
-    /// [`crate::fk::CONTINUOUS_RANGE`]).
+    /// Whether each arm joint is continuous (turns without end; planned over `[-2π, 2π]`,
+    /// its range in [`Robot::joint_limits`]).
     pub fn continuous_joints(&self) -> &[bool] {
         &self.arm.continuous
     }
@@ -614,7 +610,7 @@ impl Robot {
 
     /// A configuration for `tcp` no joint of which is more than `max_joint_step` from
     /// `previous`, for following a path without jumps.
-    pub fn ik_continuous(
+    pub(crate) fn ik_continuous(
         &self,
         tcp: &Pose,
         previous: &[f64],
@@ -626,7 +622,8 @@ impl Robot {
     }
 
     /// The inverse kinematics solver.
-    pub fn ik_solver(&self) -> &IkSolver {
+    #[cfg(test)]
+    pub(crate) fn ik_solver(&self) -> &IkSolver {
         &self.ik
     }
 }

@@ -33,7 +33,7 @@ fn cumulative_lengths(path: &[Vec<f64>]) -> Vec<f64> {
 
 /// Shortens `path` with `attempts` random shortcuts, then removes redundant waypoints.
 /// The endpoints never change; every new edge is checked in `space`.
-pub fn shortcut<R: Rng + ?Sized>(
+pub(crate) fn shortcut<R: Rng + ?Sized>(
     path: Vec<Vec<f64>>,
     space: &Space,
     attempts: usize,
@@ -77,7 +77,7 @@ pub fn shortcut<R: Rng + ?Sized>(
 }
 
 /// Drops every waypoint whose predecessor (in the kept path) sees its successor.
-pub fn remove_redundant(path: Vec<Vec<f64>>, space: &Space) -> Vec<Vec<f64>> {
+pub(crate) fn remove_redundant(path: Vec<Vec<f64>>, space: &Space) -> Vec<Vec<f64>> {
     if path.len() < 3 {
         return path;
     }

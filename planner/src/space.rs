@@ -29,12 +29,13 @@ impl Space<'_> {
     }
 
     /// Whether `q` is collision-free and within the limits.
-    pub fn valid(&self, q: &[f64]) -> bool {
+    #[cfg(test)]
+    pub(crate) fn valid(&self, q: &[f64]) -> bool {
         self.check(q).is_none()
     }
 
     /// The first collision on the straight edge from `a` to `b`, if any.
-    pub fn edge(&self, a: &[f64], b: &[f64]) -> Option<Hit> {
+    pub(crate) fn edge(&self, a: &[f64], b: &[f64]) -> Option<Hit> {
         self.checker.edge(a, b, self.width, self.held, self.allow)
     }
 
@@ -61,11 +62,11 @@ pub fn distance(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Total joint-space length of a path.
-pub fn path_length(path: &[Vec<f64>]) -> f64 {
+pub(crate) fn path_length(path: &[Vec<f64>]) -> f64 {
     path.windows(2).map(|w| distance(&w[0], &w[1])).sum()
 }
 
 /// The point a fraction `t` of the way from `a` to `b`.
-pub fn lerp(a: &[f64], b: &[f64], t: f64) -> Vec<f64> {
+pub(crate) fn lerp(a: &[f64], b: &[f64], t: f64) -> Vec<f64> {
     a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect()
 }

@@ -26,10 +26,10 @@ use akl_tsr::Pose;
 /// perception error (4°) that leaves objects turned in the hand. Further off, a pad meets an
 /// edge or corner first and what happens depends on friction the simulation does not model,
 /// so the object stays as it was grasped.
-pub const MAX_SQUARING: f64 = 0.1;
+pub(crate) const MAX_SQUARING: f64 = 0.1;
 
 /// The turn (radians, about TCP z) that lays `shape`, at `in_tcp` in the TCP frame, flat on the
-/// pads; 0 when the shape is round about that axis or the turn would exceed [`MAX_SQUARING`].
+/// pads; 0 when the shape is round about that axis or the turn would exceed 0.1 rad (`MAX_SQUARING`).
 pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
     let r = in_tcp.rotation.to_rotation_matrix();
     let axis = |k: usize| -> Vector3<f64> { r.matrix().column(k).into_owned() };
@@ -59,7 +59,7 @@ pub fn squaring_turn(shape: &Shape, in_tcp: &Pose) -> f64 {
 /// The tilt (radians, about TCP x) that stands a cylinder held by its side, its axis along the
 /// approach, back into the pads' planes; 0 for other shapes and grasps, and when the tilt would
 /// exceed [`MAX_SQUARING`].
-pub fn straightening_tilt(shape: &Shape, in_tcp: &Pose) -> f64 {
+pub(crate) fn straightening_tilt(shape: &Shape, in_tcp: &Pose) -> f64 {
     let (Shape::Cylinder { .. } | Shape::Capsule { .. }) = shape else {
         return 0.0;
     };
@@ -77,7 +77,7 @@ pub fn straightening_tilt(shape: &Shape, in_tcp: &Pose) -> f64 {
 }
 
 /// `in_tcp` turned by [`squaring_turn`] about the TCP's z axis and stood up by
-/// [`straightening_tilt`] about its x axis: the pose the squeeze leaves the object at in the
+/// `straightening_tilt` about its x axis: the pose the squeeze leaves the object at in the
 /// hand.
 pub fn squared_in_hand(shape: &Shape, in_tcp: &Pose) -> Pose {
     let turn = squaring_turn(shape, in_tcp);

@@ -66,7 +66,7 @@ impl Trapezoid {
     }
 
     /// Distance covered after time `t` (clamped to the profile).
-    pub fn position(&self, t: f64) -> f64 {
+    pub(crate) fn position(&self, t: f64) -> f64 {
         if self.duration <= 0.0 {
             return if t > 0.0 { self.length } else { 0.0 };
         }
@@ -108,7 +108,7 @@ pub enum Timing {
 
 impl Timing {
     /// Duration in seconds.
-    pub fn duration(&self) -> f64 {
+    pub(crate) fn duration(&self) -> f64 {
         match self {
             Timing::Hold { duration } => *duration,
             Timing::Linear { pieces } => pieces.iter().map(|p| p.duration).sum(),
@@ -148,7 +148,7 @@ impl Timing {
 }
 
 /// Times a path of straight pieces that stops at every waypoint.
-pub fn linear(waypoints: &[Vec<f64>], vmax: &[f64], amax: &[f64]) -> Timing {
+pub(crate) fn linear(waypoints: &[Vec<f64>], vmax: &[f64], amax: &[f64]) -> Timing {
     let pieces = waypoints
         .windows(2)
         .map(|w| {
@@ -205,7 +205,7 @@ fn coefficients(w: &[Vec<f64>], m: &[Vec<f64>], i: usize, j: usize) -> [f64; 4] 
 }
 
 /// The cubic's value at parameter `u` (0 at the first waypoint, n-1 at the last).
-pub fn cubic_at(waypoints: &[Vec<f64>], tangents: &[Vec<f64>], u: f64) -> Vec<f64> {
+pub(crate) fn cubic_at(waypoints: &[Vec<f64>], tangents: &[Vec<f64>], u: f64) -> Vec<f64> {
     let n = waypoints.len();
     if n == 1 {
         return waypoints[0].clone();
@@ -222,7 +222,7 @@ pub fn cubic_at(waypoints: &[Vec<f64>], tangents: &[Vec<f64>], u: f64) -> Vec<f6
 }
 
 /// Times dense waypoints joined by a monotone cubic (see the module documentation).
-pub fn cubic(waypoints: &[Vec<f64>], vmax: &[f64], amax: &[f64]) -> Timing {
+pub(crate) fn cubic(waypoints: &[Vec<f64>], vmax: &[f64], amax: &[f64]) -> Timing {
     let n = waypoints.len();
     if n < 2 {
         return Timing::Hold { duration: 0.0 };

@@ -66,7 +66,7 @@ pub fn chain(robot: &urdf_rs::Robot) -> k::Chain<f64> {
 /// Checks that links and joints form one tree, joint types are supported, mimic targets exist
 /// and numbers are finite. Every problem found is reported, each naming its joint or link:
 /// one alone as itself, several as [`UrdfError::Several`].
-pub fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
+pub(crate) fn validate(robot: &urdf_rs::Robot) -> Result<(), UrdfError> {
     let mut problems = Vec::new();
     let links: BTreeSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     if links.len() != robot.links.len() {

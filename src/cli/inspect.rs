@@ -120,7 +120,7 @@ pub(crate) struct RobotInitArgs {
     /// Where a ROS package the URDF's `package://` meshes name lies (repeatable); written
     /// into the folder's `[packages]`.
     #[arg(long, value_name = "NAME=DIR")]
-    pub package_path: Vec<akl_planner::meshes::PackagePath>,
+    pub package_path: Vec<akl_planner::PackagePath>,
     /// The robot folder to write (must not hold a robot.toml yet).
     #[arg(short = 'o', long = "output", value_name = "DIR")]
     pub output: PathBuf,

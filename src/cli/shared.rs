@@ -38,7 +38,7 @@ pub(crate) struct RobotArg {
     /// Where a ROS package the URDF's `package://` meshes name lies (repeatable); looked up
     /// before the robot folder's `[packages]` and `ROS_PACKAGE_PATH`.
     #[arg(long, value_name = "NAME=DIR", requires = "robot")]
-    pub package_path: Vec<akl_planner::meshes::PackagePath>,
+    pub package_path: Vec<akl_planner::PackagePath>,
 }
 
 /// Trial settings shared by `akl validate`, `relax` and `compare`.

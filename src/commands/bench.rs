@@ -12,7 +12,7 @@ use akl_planner::benchmark::{
     Times,
 };
 use akl_planner::collision::RobotCollision;
-use akl_planner::rrt::{DynamicDomain, RrtOptions};
+use akl_planner::{DynamicDomain, RrtOptions};
 use std::path::Path;
 
 /// Runs `akl bench ...`.

@@ -4,8 +4,7 @@ use super::print_json;
 use crate::cli::{RobotArg, RobotCommand};
 use crate::exit::{CliError, CliResult};
 use crate::table::{vec3, Table};
-use akl_planner::enclosure::{stand_off, StandOff};
-use akl_planner::meshes::MeshRole;
+use akl_planner::{stand_off, MeshRole, StandOff};
 use akl_planner::{Geometry, IkError, Robot};
 use akl_tsr::rpy::rpy_from_rotation;
 use akl_tsr::{Pose, PoseJson};
@@ -101,9 +100,9 @@ struct Info {
     finger_joints: Vec<String>,
     open_width: f64,
     hand_links: Vec<String>,
-    margins: akl_planner::config::CollisionConfig,
+    margins: akl_planner::CollisionConfig,
     /// Where the robot stands in the task's robot base frame (`None`: at the robot base).
-    mount: Option<akl_planner::config::MountConfig>,
+    mount: Option<akl_planner::MountConfig>,
     links: Vec<LinkInfo>,
 }
 
@@ -115,9 +114,9 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         name: robot.name().to_string(),
         source: robot.source().to_string(),
         ik_solver: match c.ik.solver {
-            akl_planner::config::IkSolverKind::Panda => "panda (analytic, q7 searched)".into(),
-            akl_planner::config::IkSolverKind::Dls => "dls (damped least squares, restarts)".into(),
-            akl_planner::config::IkSolverKind::Trac => {
+            akl_planner::IkSolverKind::Panda => "panda (analytic, q7 searched)".into(),
+            akl_planner::IkSolverKind::Dls => "dls (damped least squares, restarts)".into(),
+            akl_planner::IkSolverKind::Trac => {
                 "trac (damped least squares and Levenberg-Marquardt racing, restarts)".into()
             }
         },

@@ -6,7 +6,7 @@
 //! gate, and *undecided* when the gate cannot tell. The verdict no longer depends on how many
 //! trials were asked for: a removal that fails one trial in fifty is essential whether 20 or
 //! 2,000 trials would have run. Planned with goals drawn from each keyframe's own stream
-//! ([`akl_planner::goal::keyframe_stream`]), the spec and the spec without a keyframe reach
+//! ([`akl_planner::keyframe_stream`]), the spec and the spec without a keyframe reach
 //! every other keyframe at the same goals in the same trial.
 //!
 //! Removing a keyframe removes the line that ends at it (a line is a property of the segment

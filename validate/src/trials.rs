@@ -5,7 +5,7 @@
 use akl_exec::batch::{trial_seed, worker_pool, Batch, BatchOptions};
 use akl_exec::report::{BatchReport, Cause, TrialReport};
 use akl_exec::{ExecError, ExecOptions};
-use akl_planner::goal::GoalStrategy;
+use akl_planner::GoalStrategy;
 use akl_planner::{PlanBudget, Robot};
 use akl_scene::Task;
 use akl_stats::{Decision, Gate, PassRate};

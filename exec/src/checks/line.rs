@@ -4,7 +4,7 @@
 use crate::report::Cause;
 use crate::report::{Failure, LineCheck};
 use crate::simulate::observations::LinePath;
-use akl_planner::line::distance_to_segment;
+use akl_planner::distance_to_segment;
 
 /// One check per line; a failure for each that strayed further than `tolerance` (metres), at
 /// the first step the TCP was beyond it.

@@ -199,7 +199,7 @@ impl ProblemFile {
 
     /// The world of scene `name` (fixed obstacles, the robot base at the origin), if the file
     /// has that scene.
-    pub fn world(&self, name: &str) -> Option<World> {
+    pub(crate) fn world(&self, name: &str) -> Option<World> {
         let obstacles = self.scenes.get(name)?;
         Some(World {
             robot_base: Pose::identity(),

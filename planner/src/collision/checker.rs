@@ -69,16 +69,6 @@ impl<'a> Checker<'a> {
         self.robot
     }
 
-    /// The robot's collision model.
-    pub fn model(&self) -> &'a RobotCollision {
-        self.model
-    }
-
-    /// The scene.
-    pub fn scene(&self) -> &'a Scene {
-        self.scene
-    }
-
     /// The first collision of configuration `q` with gripper opening `width`, holding `held`
     /// (if any), under `allow`; `None` if it is collision-free and within the joint limits.
     pub fn check(
@@ -154,7 +144,8 @@ impl<'a> Checker<'a> {
     /// Upper bound on how far any point of the robot's collision elements, or of `held`,
     /// moves when the arm goes in a straight joint-space line from `a` to `b` with gripper
     /// opening `width` (the bound of [`Checker::edge`], taken about the edge's midpoint).
-    pub fn sweep_bound(&self, a: &[f64], b: &[f64], width: f64, held: Option<&Held>) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn sweep_bound(&self, a: &[f64], b: &[f64], width: f64, held: Option<&Held>) -> f64 {
         let mid: Vec<f64> = a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
         let mut poses = LinkPoses::from_elem(Pose::identity(), self.robot.links().len());
         self.robot
@@ -418,7 +409,7 @@ impl<'a> Checker<'a> {
     /// spread over the edge in bisection order and collisions are found early. Each check
     /// proves at least half the smallest margin of motion, so the number of checks is at most
     /// about the bound on how far points move divided by that.
-    pub fn edge(
+    pub(crate) fn edge(
         &self,
         a: &[f64],
         b: &[f64],

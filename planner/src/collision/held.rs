@@ -41,9 +41,4 @@ impl Held {
             radius: in_tcp.translation.vector.norm() + core + margin,
         }
     }
-
-    /// Radius of a ball about the TCP that holds the (grown) object.
-    pub fn radius(&self) -> f64 {
-        self.radius
-    }
 }

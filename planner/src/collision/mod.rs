@@ -7,12 +7,12 @@
 //! against each other. Link pairs in `allowed_pairs` are never tested, nor `mount_links`
 //! against the object under the robot base.
 //!
-//! Edges (straight joint-space segments, [`Checker::edge`]) are checked continuously in the
+//! Edges (straight joint-space segments, `Checker::edge`) are checked continuously in the
 //! following sense: every clearance keeps at least half its margin everywhere along an edge
 //! reported free. Each check on the edge proves a stretch around it free, as long as the
 //! stretch is short enough that no point moves further than the clearance found at the
 //! check plus half the margin. How far points move is bounded per collision element by
-//! [`Checker::sweep_bound`]: turning joint j by Δ moves a point at distance r from its axis by
+//! `Checker::sweep_bound`: turning joint j by Δ moves a point at distance r from its axis by
 //! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
 //! joints beyond j move the point.
 //!
@@ -38,6 +38,6 @@ mod tests;
 pub use checker::Checker;
 pub use held::Held;
 pub use hit::Hit;
-pub use model::{Group, Margins, RobotCollision};
+pub use model::{Margins, RobotCollision};
 pub use report::{CheckReport, Clearance, Contact};
 pub use scene::Scene;

@@ -19,7 +19,7 @@ const SLAB: f64 = 0.12;
 
 /// Which margin a link's shapes get.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Group {
+pub(crate) enum Group {
     /// Arm links (`arm_margin`).
     Arm,
     /// Hand and finger links (`hand_margin`).
@@ -110,7 +110,7 @@ pub struct Margins {
 
 impl Margins {
     /// The clearance kept between the world and links of `group`.
-    pub fn world(&self, group: Group) -> f64 {
+    pub(crate) fn world(&self, group: Group) -> f64 {
         match group {
             Group::Arm => self.arm,
             Group::Hand => self.hand,
@@ -268,7 +268,8 @@ impl RobotCollision {
     }
 
     /// Number of link pairs tested against each other.
-    pub fn self_pair_count(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn self_pair_count(&self) -> usize {
         self.self_pairs.len()
     }
 }

@@ -56,11 +56,6 @@ impl Scene {
         }
     }
 
-    /// The robot base pose in the world.
-    pub fn base(&self) -> &Pose {
-        &self.base
-    }
-
     /// Name of the object the robot is mounted on, if any.
     pub fn mount(&self) -> Option<&str> {
         self.mount.map(|i| self.obstacles[i].name.as_str())

@@ -23,12 +23,12 @@ use num_bigint::BigUint;
 use std::collections::HashMap;
 
 /// The largest number of keyframes a count handles (sets of met keyframes are `u128` masks).
-pub const MAX_KEYFRAMES: usize = 127;
+pub(super) const MAX_KEYFRAMES: usize = 127;
 
 /// What a count needs: the lattice's neighbours, the start and end cells, each keyframe's
 /// region and each segment's line cells, and the step budget.
 #[derive(Debug, Clone, Copy)]
-pub struct TraceProblem<'a> {
+pub(super) struct TraceProblem<'a> {
     /// Six neighbour ids per cell, [`NONE`] where there is none.
     pub neighbors: &'a [u32],
     /// Where every trace starts.
@@ -247,7 +247,7 @@ fn remaining(problem: &TraceProblem) -> Vec<Vec<u32>> {
 /// The exact number of traces of `problem`. A problem with more than [`MAX_KEYFRAMES`]
 /// keyframes, or with `lines` of another length than `regions`, is malformed and has none
 /// (callers check both first).
-pub fn count_traces(problem: &TraceProblem) -> BigUint {
+pub(super) fn count_traces(problem: &TraceProblem) -> BigUint {
     let n = problem.keyframes();
     if n > MAX_KEYFRAMES || problem.lines.len() != n || problem.cells() == 0 {
         return BigUint::default();
@@ -309,7 +309,7 @@ pub fn count_traces(problem: &TraceProblem) -> BigUint {
 }
 
 /// log2 of a positive count, `None` for zero.
-pub fn log2(count: &BigUint) -> Option<f64> {
+pub(super) fn log2(count: &BigUint) -> Option<f64> {
     let bits = count.bits();
     if bits == 0 {
         return None;

@@ -8,7 +8,7 @@ use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 
 /// Marks a missing neighbour or a grid point that is not a cell.
-pub const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
 
 /// The six face-neighbour offsets, in the order of [`Lattice::neighbors`].
 const OFFSETS: [[i64; 3]; 6] = [
@@ -37,7 +37,7 @@ pub struct Lattice {
 }
 
 /// Whether world point `p` lies inside `shape` at `pose` (cylinders along their z axis).
-pub fn shape_contains(shape: &Shape, pose: &Pose, p: &Vector3<f64>) -> bool {
+pub(super) fn shape_contains(shape: &Shape, pose: &Pose, p: &Vector3<f64>) -> bool {
     let local = pose.inverse_transform_point(&(*p).into()).coords;
     match *shape {
         Shape::Box { size } => (0..3).all(|i| local[i].abs() <= 0.5 * size[i]),
@@ -121,7 +121,7 @@ impl Lattice {
     }
 
     /// Edge length of a cell (metres).
-    pub fn resolution(&self) -> f64 {
+    pub(crate) fn resolution(&self) -> f64 {
         self.resolution
     }
 
@@ -136,35 +136,35 @@ impl Lattice {
     }
 
     /// Six neighbour ids per cell, [`NONE`] where there is none.
-    pub fn neighbors(&self) -> &[u32] {
+    pub(crate) fn neighbors(&self) -> &[u32] {
         &self.neighbors
     }
 
     /// World position of a cell's centre.
-    pub fn centre(&self, cell: u32) -> Vector3<f64> {
+    pub(crate) fn centre(&self, cell: u32) -> Vector3<f64> {
         let c = self.coords[cell as usize];
         self.grid_point([c[0] as i64, c[1] as i64, c[2] as i64])
     }
 
     /// Grid coordinates of a cell.
-    pub fn coords(&self, cell: u32) -> [i64; 3] {
+    pub(crate) fn coords(&self, cell: u32) -> [i64; 3] {
         let c = self.coords[cell as usize];
         [c[0] as i64, c[1] as i64, c[2] as i64]
     }
 
     /// World position of a grid point (a cell's centre when it is a cell).
-    pub fn grid_point(&self, g: [i64; 3]) -> Vector3<f64> {
+    pub(crate) fn grid_point(&self, g: [i64; 3]) -> Vector3<f64> {
         self.origin + Vector3::new(g[0] as f64, g[1] as f64, g[2] as f64) * self.resolution
     }
 
     /// The grid point whose cell contains `p` (nearest centre).
-    pub fn grid_of(&self, p: &Vector3<f64>) -> [i64; 3] {
+    pub(crate) fn grid_of(&self, p: &Vector3<f64>) -> [i64; 3] {
         let g = (p - self.origin) / self.resolution;
         [g.x.round() as i64, g.y.round() as i64, g.z.round() as i64]
     }
 
     /// The cell at grid point `g`, or [`NONE`] when it is outside the workspace or furniture.
-    pub fn id_at(&self, g: [i64; 3]) -> u32 {
+    pub(crate) fn id_at(&self, g: [i64; 3]) -> u32 {
         if (0..3).any(|i| g[i] < 0 || g[i] >= self.dims[i] as i64) {
             return NONE;
         }
@@ -173,14 +173,14 @@ impl Lattice {
     }
 
     /// The cell containing `p`, if it is a cell of the workspace.
-    pub fn cell_at(&self, p: &Vector3<f64>) -> Option<u32> {
+    pub(crate) fn cell_at(&self, p: &Vector3<f64>) -> Option<u32> {
         let id = self.id_at(self.grid_of(p));
         (id != NONE).then_some(id)
     }
 
     /// Shortest number of steps from any of `sources` (each entering at its own step count) to
     /// every cell, [`u32::MAX`] for cells that cannot be reached.
-    pub fn distances(&self, sources: &[(u32, u32)]) -> Vec<u32> {
+    pub(crate) fn distances(&self, sources: &[(u32, u32)]) -> Vec<u32> {
         distances(&self.neighbors, sources)
     }
 }
@@ -188,7 +188,7 @@ impl Lattice {
 /// Shortest number of steps over a neighbour table (six ids per cell) from any of `sources`
 /// (each entering at its own step count) to every cell, [`u32::MAX`] where unreachable: a
 /// breadth-first search with staggered sources.
-pub fn distances(neighbors: &[u32], sources: &[(u32, u32)]) -> Vec<u32> {
+pub(super) fn distances(neighbors: &[u32], sources: &[(u32, u32)]) -> Vec<u32> {
     let cells = neighbors.len() / 6;
     let mut dist = vec![u32::MAX; cells];
     let mut by_level: Vec<(u32, u32)> = sources.to_vec();

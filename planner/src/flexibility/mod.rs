@@ -2,15 +2,15 @@
 //!
 //! **Bits of freedom** ([`Workspace::freedom`]). The thesis defines the flexibility of a spec
 //! as the number of execution traces that satisfy it (Definition 3.2.1). Here a trace is a
-//! walk of the tool centre point over a lattice of the workspace ([`lattice`]): cubic cells
+//! walk of the tool centre point over a lattice of the workspace (`lattice`): cubic cells
 //! of [`FreedomOptions::resolution`] within the robot's reach and above its base, without the
 //! cells whose centre lies inside furniture (objects at the places the task file gives them).
 //! A trace starts and ends at the TCP of the robot's ready configuration, meets every
-//! keyframe's region ([`regions`]: the cells its grounded TSR reaches) in order, keeps every
+//! keyframe's region (`regions`: the cells its grounded TSR reaches) in order, keeps every
 //! `move_in_line` segment on the cells of the straight lines between its two keyframes'
-//! regions, and takes at most the task's step budget ([`route`]: a fixed multiple of the
+//! regions, and takes at most the task's step budget (`route`: a fixed multiple of the
 //! shortest walk along the task's teaching route, the same for every spec of a task). Traces
-//! are counted exactly ([`count`]); the measure is log2 of the count, in bits. Adding a
+//! are counted exactly (`count`); the measure is log2 of the count, in bits. Adding a
 //! keyframe or a line can only remove traces (Lemma 3.2.1), so a spec with a redundant
 //! keyframe or an unintended line has fewer bits than the least restrictive one. Each
 //! keyframe's share of the loss is the bits the spec gains without it (and without the lines
@@ -22,28 +22,28 @@
 //! millimetres can differ by a few bits (the specs learned from the simulated teacher's
 //! demonstration of pick_place have 118.9 bits, the truth 116.6).
 //!
-//! **What the planner gains** ([`gains`]). Over randomized scenes of the task, the budgeted
+//! **What the planner gains** (`gains`). Over randomized scenes of the task, the budgeted
 //! planner's success rate and the best and median execution time and joint-path length it
 //! finds, beside those of the nominal-first candidate in the same scenes.
 
-pub mod count;
-pub mod gains;
-pub mod lattice;
-pub mod regions;
-pub mod route;
+mod count;
+mod gains;
+mod lattice;
+mod regions;
+mod route;
 
 use crate::robot::Robot;
 use akl_scene::Task;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::{Constraint, TaskSpec};
 use count::{count_traces, log2, TraceProblem, MAX_KEYFRAMES};
-use lattice::Lattice;
 use num_bigint::BigUint;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-pub use gains::{planner_gains, GainOptions, Gains};
+pub use gains::{planner_gains, GainOptions, Gains, SceneFailure, Spread};
+pub use lattice::Lattice;
 
 /// Why a spec's flexibility cannot be measured.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -335,17 +335,6 @@ impl Workspace {
             lines: lines_report,
         })
     }
-}
-
-/// Bits of freedom of `spec` in `task` for `robot` with the default options: the number
-/// `akl validate`, `relax` and `compare` rank specs by. Builds the task's lattice; to measure
-/// many specs of one task, build a [`Workspace`] once and call [`Workspace::bits`].
-pub fn bits_of_freedom(
-    robot: &Robot,
-    task: &Task,
-    spec: &TaskSpec,
-) -> Result<Option<f64>, FlexibilityError> {
-    Workspace::new(robot, task, &FreedomOptions::default())?.bits(spec)
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ const MAX_ANGLE_SAMPLES: usize = 25;
 /// comes within the grid's error of the box moved by some sample. The region may so exceed the
 /// exact one (by that error, and for a frame w turned against the lattice by the corners of
 /// the turned cell) but never falls short of it.
-pub fn keyframe_cells(lattice: &Lattice, tsr: &Tsr) -> Vec<u32> {
+pub(super) fn keyframe_cells(lattice: &Lattice, tsr: &Tsr) -> Vec<u32> {
     let mut cells = BTreeSet::new();
     if let Some(c) = lattice.cell_at(&tsr.nominal().translation.vector) {
         cells.insert(c);
@@ -102,7 +102,7 @@ pub fn keyframe_cells(lattice: &Lattice, tsr: &Tsr) -> Vec<u32> {
 /// The grid points a straight line from grid point `a` to grid point `b` passes through, in
 /// order, each a face neighbour of the one before (a 3-D voxel traversal; where the line
 /// crosses an edge or corner exactly, x steps before y before z).
-pub fn traversal(a: [i64; 3], b: [i64; 3]) -> Vec<[i64; 3]> {
+pub(super) fn traversal(a: [i64; 3], b: [i64; 3]) -> Vec<[i64; 3]> {
     let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let steps = d.iter().map(|v| v.unsigned_abs() as usize).sum::<usize>();
     let mut out = Vec::with_capacity(steps + 1);
@@ -144,7 +144,7 @@ pub fn traversal(a: [i64; 3], b: [i64; 3]) -> Vec<[i64; 3]> {
 /// straight line between a cell of one and a cell of the other passes through. A line that
 /// crosses a point that is not a cell (furniture, out of reach) contributes nothing: no trace
 /// can follow it.
-pub fn line_cells(lattice: &Lattice, from: &[u32], to: &[u32]) -> Vec<u32> {
+pub(super) fn line_cells(lattice: &Lattice, from: &[u32], to: &[u32]) -> Vec<u32> {
     let mut cells = BTreeSet::new();
     for &a in from {
         for &b in to {

@@ -9,7 +9,11 @@ use akl_scene::Task;
 
 /// Steps of the shortest walk from `start` through the cells of the task's teaching targets
 /// in order and back to `start`.
-pub fn route_steps(lattice: &Lattice, task: &Task, start: u32) -> Result<usize, FlexibilityError> {
+pub(super) fn route_steps(
+    lattice: &Lattice,
+    task: &Task,
+    start: u32,
+) -> Result<usize, FlexibilityError> {
     let targets = task
         .teaching
         .targets(&task.world)

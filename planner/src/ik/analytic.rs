@@ -18,19 +18,19 @@ use akl_tsr::Pose;
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Number of arm joints the solver handles.
-pub const DOF: usize = 7;
+pub(crate) const DOF: usize = 7;
 
 /// Grid step of the q7 search (radians).
-pub const Q7_STEP: f64 = 0.2;
+pub(crate) const Q7_STEP: f64 = 0.2;
 
 /// Grid step of the second, finer q7 sweep run when the coarse one finds nothing (radians).
-pub const Q7_FINE_STEP: f64 = 0.01;
+pub(crate) const Q7_FINE_STEP: f64 = 0.01;
 
 /// Largest position error (metres) a candidate may have once checked by forward kinematics.
-pub const POSITION_TOLERANCE: f64 = 1e-6;
+pub(crate) const POSITION_TOLERANCE: f64 = 1e-6;
 
 /// Largest rotation error (radians) a candidate may have once checked by forward kinematics.
-pub const ROTATION_TOLERANCE: f64 = 1e-6;
+pub(crate) const ROTATION_TOLERANCE: f64 = 1e-6;
 
 /// The twist angles of the Panda's modified DH parameters, joints 1 to 7.
 const ALPHA: [f64; DOF] = [
@@ -39,14 +39,13 @@ const ALPHA: [f64; DOF] = [
 
 /// The analytic Panda solver: the arm's lengths, limits and the TCP offset from frame 7.
 #[derive(Debug, Clone)]
-pub struct PandaIk {
+pub(crate) struct PandaIk {
     d1: f64,
     d3: f64,
     a4: f64,
     a5: f64,
     d5: f64,
     a7: f64,
-    tcp_in_7: Pose,
     seven_in_tcp: Pose,
     /// The inverse of joint 1's parent frame in the robot's base frame (identity unless
     /// fixed links before the arm move it).
@@ -78,7 +77,10 @@ impl PandaIk {
     /// Reads the Panda's lengths from compiled kinematics, checking the structure: seven
     /// revolute joints about z directly after one another from the base, with the Panda's
     /// twists and zero offsets where the Panda has them, and only fixed joints to the TCP.
-    pub fn from_kinematics(kin: &Kinematics, limits: &[[f64; 2]]) -> Result<Self, PandaIkError> {
+    pub(crate) fn from_kinematics(
+        kin: &Kinematics,
+        limits: &[[f64; 2]],
+    ) -> Result<Self, PandaIkError> {
         if kin.dof() != DOF || limits.len() != DOF {
             return Err(PandaIkError::JointCount(kin.dof()));
         }
@@ -154,7 +156,6 @@ impl PandaIk {
             a5: ad[4].0,
             d5: ad[4].1,
             a7: ad[6].0,
-            tcp_in_7,
             seven_in_tcp: tcp_in_7.inverse(),
             arm_base_inverse: base.inverse(),
             limits: lim,
@@ -163,18 +164,19 @@ impl PandaIk {
 
     /// The pose of frame 7, in the frame of joint 1's parent, that puts the TCP at `tcp`
     /// (given in the robot's base frame).
-    pub fn frame7_for(&self, tcp: &Pose) -> Pose {
+    pub(crate) fn frame7_for(&self, tcp: &Pose) -> Pose {
         self.arm_base_inverse * tcp * self.seven_in_tcp
-    }
-
-    /// The TCP offset from frame 7.
-    pub fn tcp_in_7(&self) -> &Pose {
-        &self.tcp_in_7
     }
 
     /// Calls `emit` with every in-limit solution that puts frame 7 at `f7` with joint 7 at
     /// `q7`; `q1_hint` resolves the shoulder singularity (q2 = 0), where only q1 + q3 is fixed.
-    pub fn solve_q7(&self, f7: &Pose, q7: f64, q1_hint: f64, mut emit: impl FnMut([f64; DOF])) {
+    pub(crate) fn solve_q7(
+        &self,
+        f7: &Pose,
+        q7: f64,
+        q1_hint: f64,
+        mut emit: impl FnMut([f64; DOF]),
+    ) {
         if q7 < self.limits[6][0] || q7 > self.limits[6][1] {
             return;
         }
@@ -308,7 +310,7 @@ impl PandaIk {
 }
 
 /// The angle equivalent to `a` (modulo 2π) inside `[lo, hi]`, if any.
-pub fn fit(a: f64, [lo, hi]: [f64; 2]) -> Option<f64> {
+pub(crate) fn fit(a: f64, [lo, hi]: [f64; 2]) -> Option<f64> {
     [a, a - 2.0 * PI, a + 2.0 * PI]
         .into_iter()
         .find(|v| *v >= lo && *v <= hi)
@@ -324,7 +326,7 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Largest single-joint difference between two configurations.
-pub fn max_step(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn max_step(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
@@ -345,7 +347,7 @@ impl PandaIk {
 
     /// The solution nearest `seed` (Euclidean in joint space) among those on the q7 grid
     /// around the seed's q7, refined by bisection in q7; `None` if the pose is unreachable.
-    pub fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Option<[f64; DOF]> {
+    pub(crate) fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Option<[f64; DOF]> {
         let f7 = self.frame7_for(tcp);
         let [lo, hi] = self.q7_range();
         let mut best: Option<([f64; DOF], f64)> = None;
@@ -397,7 +399,7 @@ impl PandaIk {
     /// The nearest solution (see [`PandaIk::nearest`]), then distinct solutions from a sweep
     /// over the whole q7 range, nearest `seed` first; two solutions are distinct when some
     /// joint differs by more than `spacing` radians.
-    pub fn solutions(
+    pub(crate) fn solutions(
         &self,
         kin: &Kinematics,
         tcp: &Pose,
@@ -441,7 +443,7 @@ impl PandaIk {
 
     /// A solution that no joint reaches by moving more than `max_joint_step` from `previous`:
     /// q7 is kept at its previous value if possible, else moved as little as needed.
-    pub fn continuous(
+    pub(crate) fn continuous(
         &self,
         kin: &Kinematics,
         tcp: &Pose,

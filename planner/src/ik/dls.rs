@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// Settings of the damped least-squares solver.
 #[derive(Debug, Clone)]
-pub struct DlsIk {
+pub(crate) struct DlsIk {
     /// `[lower, upper]` per arm joint.
     pub limits: Vec<[f64; 2]>,
     /// Damping λ of `Jᵀ(JJᵀ + λ²I)⁻¹`: trades accuracy near singularities for bounded steps.
@@ -28,7 +28,7 @@ pub struct DlsIk {
 
 impl DlsIk {
     /// A solver with the defaults used by the planner.
-    pub fn new(limits: Vec<[f64; 2]>) -> Self {
+    pub(crate) fn new(limits: Vec<[f64; 2]>) -> Self {
         DlsIk {
             limits,
             damping: 0.01,
@@ -41,7 +41,7 @@ impl DlsIk {
     }
 
     /// Descends from `start` towards `tcp`; `Some` once within the tolerances.
-    pub fn descend(&self, kin: &Kinematics, tcp: &Pose, start: &[f64]) -> Option<Vec<f64>> {
+    pub(crate) fn descend(&self, kin: &Kinematics, tcp: &Pose, start: &[f64]) -> Option<Vec<f64>> {
         let mut q: Vec<f64> = start
             .iter()
             .zip(&self.limits)
@@ -82,7 +82,7 @@ impl DlsIk {
     }
 
     /// A solution from the seed, else from random starts (fixed RNG seed: deterministic).
-    pub fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Option<Vec<f64>> {
+    pub(crate) fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Option<Vec<f64>> {
         if let Some(q) = self.descend(kin, tcp, seed) {
             return Some(q);
         }
@@ -95,7 +95,7 @@ impl DlsIk {
 
     /// Up to `max` distinct solutions (some joint differs by more than `spacing`), from the
     /// seed and from random starts, nearest the seed first.
-    pub fn solutions(
+    pub(crate) fn solutions(
         &self,
         kin: &Kinematics,
         tcp: &Pose,
@@ -140,7 +140,7 @@ impl DlsIk {
 
     /// A solution reached from `previous` by descent, if no joint moved more than
     /// `max_joint_step`.
-    pub fn continuous(
+    pub(crate) fn continuous(
         &self,
         kin: &Kinematics,
         tcp: &Pose,

@@ -2,20 +2,20 @@
 //! racing one (`trac`),
 //! behind one interface that takes TCP poses in the robot base frame.
 
-pub mod analytic;
-pub mod dls;
-pub mod trac;
+pub(crate) mod analytic;
+mod dls;
+mod trac;
 
 use crate::error::IkError;
 use crate::fk::Kinematics;
 use akl_tsr::Pose;
-pub use analytic::PandaIk;
-pub use dls::DlsIk;
+pub(crate) use analytic::PandaIk;
+pub(crate) use dls::DlsIk;
 pub use trac::TracIk;
 
 /// The solver a robot uses (chosen in `robot.toml`).
 #[derive(Debug, Clone)]
-pub enum IkSolver {
+pub(crate) enum IkSolver {
     /// Analytic, for the Panda, with `dls` to follow paths (least-norm steps) and to add the
     /// solution nearest the seed to the analytic ones.
     Panda {
@@ -32,7 +32,12 @@ pub enum IkSolver {
 
 impl IkSolver {
     /// The solution nearest `seed`, or [`IkError::Unreachable`].
-    pub fn nearest(&self, kin: &Kinematics, tcp: &Pose, seed: &[f64]) -> Result<Vec<f64>, IkError> {
+    pub(crate) fn nearest(
+        &self,
+        kin: &Kinematics,
+        tcp: &Pose,
+        seed: &[f64],
+    ) -> Result<Vec<f64>, IkError> {
         match self {
             IkSolver::Panda { analytic, .. } => {
                 analytic.nearest(kin, tcp, seed).map(|q| q.to_vec())
@@ -45,7 +50,7 @@ impl IkSolver {
 
     /// Up to `max` distinct solutions, nearest `seed` first (empty if unreachable). For the
     /// Panda: the analytic ones and the one damped least squares reaches from the seed.
-    pub fn solutions(
+    pub(crate) fn solutions(
         &self,
         kin: &Kinematics,
         tcp: &Pose,
@@ -80,7 +85,7 @@ impl IkSolver {
     }
 
     /// A solution within `max_joint_step` of `previous` on every joint, for following paths.
-    pub fn continuous(
+    pub(crate) fn continuous(
         &self,
         kin: &Kinematics,
         tcp: &Pose,

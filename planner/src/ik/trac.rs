@@ -23,11 +23,11 @@ use rand_chacha::ChaCha8Rng;
 #[derive(Debug, Clone)]
 pub struct TracIk {
     /// The damped least-squares solver (also used alone to follow paths).
-    pub dls: DlsIk,
+    pub(crate) dls: DlsIk,
     /// Iterations of one solver from one start before it restarts.
-    pub iterations_per_start: usize,
+    pub(crate) iterations_per_start: usize,
     /// Iterations of each solver in all, over its restarts, before giving up.
-    pub iterations: usize,
+    pub(crate) iterations: usize,
 }
 
 /// One racer: where it is, its start count and its generator.
@@ -144,7 +144,7 @@ impl TracIk {
 
     /// Races the two solvers from `start` (then from random starts, the generators seeded
     /// with `seed`); the configuration of the first to reach `target`.
-    pub fn race(
+    pub(crate) fn race(
         &self,
         kin: &Kinematics,
         target: &Pose,
@@ -180,7 +180,7 @@ impl TracIk {
 
     /// Up to `max` distinct solutions (some joint differs by more than `spacing`), raced
     /// from the seed and then from random starts, nearest the seed first.
-    pub fn solutions(
+    pub(crate) fn solutions(
         &self,
         kin: &Kinematics,
         tcp: &Pose,

@@ -1,12 +1,12 @@
 //! `akl robot init`: a robot folder guessed from a stock URDF. The joint tree gives the arm,
-//! the gripper and the flange ([`structure`]); the gripper's pads give the TCP (an existing
+//! the gripper and the flange ([`Structure`]); the gripper's pads give the TCP (an existing
 //! link there, else one added to the folder's copy of the URDF); the URDF gives the limits;
 //! inverse kinematics gives a ready pose with the TCP pointing down in front of the base; and
-//! random configurations give the link pairs that need no collision check ([`pairs`]).
+//! random configurations give the link pairs that need no collision check ([`PairSummary`]).
 //! Everything guessed is returned for printing, so the user can review it.
 
-pub mod pairs;
-pub mod structure;
+mod pairs;
+mod structure;
 mod tcp;
 
 use crate::config::{CollisionConfig, GripperConfig, IkConfig, IkSolverKind, RobotConfig};

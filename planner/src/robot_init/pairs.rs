@@ -11,7 +11,7 @@ use serde::Serialize;
 
 /// The link pairs found not to need checking, each as link indices (lower first).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct PairGuess {
+pub(super) struct PairGuess {
     /// Links next to each other in the chain (nearest ancestors with collision geometry),
     /// and the two fingers.
     pub adjacent: Vec<(usize, usize)>,
@@ -27,7 +27,7 @@ pub struct PairGuess {
 
 impl PairGuess {
     /// Every pair not to check, sorted.
-    pub fn allowed(&self) -> Vec<(usize, usize)> {
+    pub(crate) fn allowed(&self) -> Vec<(usize, usize)> {
         let mut all: Vec<(usize, usize)> = [&self.adjacent, &self.never, &self.always]
             .into_iter()
             .flatten()
@@ -74,7 +74,7 @@ pub(super) fn meet(
 /// Measures which link pairs of `robot` need checking over `samples` random configurations
 /// (seeded: the same every time); `fingers` are the finger links, never checked against each
 /// other.
-pub fn measure(robot: &Robot, fingers: &[usize], samples: usize, seed: u64) -> PairGuess {
+pub(super) fn measure(robot: &Robot, fingers: &[usize], samples: usize, seed: u64) -> PairGuess {
     let links = robot.links();
     let shapes = link_shapes(robot);
     let shaped: Vec<usize> = (0..links.len())

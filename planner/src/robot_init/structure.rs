@@ -39,7 +39,7 @@ pub struct Structure {
 }
 
 /// Reads the structure of a validated URDF, or says why no arm can be found in it.
-pub fn structure(urdf: &urdf_rs::Robot) -> Result<Structure, String> {
+pub(super) fn structure(urdf: &urdf_rs::Robot) -> Result<Structure, String> {
     let joints = UrdfJoints::of(urdf);
     let by_child: BTreeMap<&str, &urdf_rs::Joint> = urdf
         .joints
