@@ -1,5 +1,5 @@
-//! A URDF: `akl_planner::parse_urdf` (urdf-rs and the checks for what k cannot take) and, for a URDF
-//! it accepts, the kinematic tree `Robot::load` builds from it.
+//! A URDF: `akl_planner::parse_urdf` (urdf-rs and the checks for what k cannot take) and,
+//! for a URDF it accepts, the kinematic tree `Robot::load` builds from it (`urdf_chain`).
 #![no_main]
 
 use akl_planner::{parse_urdf, urdf_chain};
