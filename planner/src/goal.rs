@@ -35,7 +35,7 @@ pub enum GoalStrategy {
     /// goals a wider TSR never changes the plan, so a trial would say nothing of the poses
     /// the spec newly allows. `akl validate` and `akl relax` plan their trials this way. (The
     /// planner may move a drawn grasp or release within its region before it is solved, to
-    /// where the hand and the held object fit: [`find_fitted_goals`].)
+    /// where the hand and the held object fit: `find_fitted_goals`.)
     Sampled,
 }
 
