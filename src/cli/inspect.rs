@@ -37,7 +37,7 @@ pub(crate) enum RobotCommand {
     /// Write a robot folder guessed from a stock URDF, and print what was guessed.
     ///
     /// Finds the arm (root, joints, flange), the gripper (two prismatic fingers, or a knuckle
-    /// with <mimic> joints), the TCP between the fingertip pads (adding a link to the folder's
+    /// with `<mimic>` joints), the TCP between the fingertip pads (adding a link to the folder's
     /// copy of the URDF when none lies there), limits from the URDF, a ready pose pointing
     /// down in front of the base, and the link pairs never checked (adjacent, and never or
     /// always meeting over random configurations). Review robot.toml before use (fields:
