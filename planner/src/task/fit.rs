@@ -209,42 +209,13 @@ fn levelled(tsr: &Tsr, pose: &Pose, in_tcp: &Pose) -> Pose {
 mod tests {
     use super::super::Holding;
     use super::*;
-    use crate::collision::{Held, RobotCollision};
-    use crate::hand::HandModel;
+    use crate::collision::Held;
     use crate::options::PlanOptions;
     use crate::robot::Robot;
     use akl_scene::{builtin, Object, Shape};
     use akl_tsr::nalgebra::{Translation3, UnitQuaternion};
-    use akl_tsr::{Bounds, Gripper};
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
+    use akl_tsr::Bounds;
     use std::cell::Cell;
-
-    fn planner<'a>(
-        robot: &'a Robot,
-        world: World,
-        options: &'a PlanOptions,
-        probes: &'a Cell<u64>,
-    ) -> Planner<'a> {
-        Planner {
-            robot,
-            model: RobotCollision::new(robot),
-            options,
-            rng: ChaCha8Rng::seed_from_u64(0),
-            q: robot.ready().to_vec(),
-            world,
-            gripper: Gripper::Open,
-            width: robot.open_width(),
-            holding: None,
-            segments: Vec::new(),
-            events: Vec::new(),
-            t: 0.0,
-            pending_line: None,
-            just_released: None,
-            probes,
-            hand: HandModel::new(robot),
-        }
-    }
 
     /// Inspection's part held from above with the TCP `above` its centre, tilted `tilt`
     /// radians about the TCP's x axis in the hand.
@@ -281,7 +252,7 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let task = builtin::task("inspection").unwrap().unwrap();
         let (options, probes) = (PlanOptions::default(), Cell::new(0));
-        let mut p = planner(&robot, task.world.clone(), &options, &probes);
+        let mut p = Planner::new(&robot, task.world.clone(), &options, &probes);
         let tsr = release_region(&p.world);
         // Held 24 mm above its centre (26 mm below its top): the region's lower half sinks it.
         part_in_hand(&mut p, 0.024, 0.0);
@@ -310,7 +281,7 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let task = builtin::task("inspection").unwrap().unwrap();
         let (options, probes) = (PlanOptions::default(), Cell::new(0));
-        let mut p = planner(&robot, task.world.clone(), &options, &probes);
+        let mut p = Planner::new(&robot, task.world.clone(), &options, &probes);
         let tsr = release_region(&p.world);
         // Tilted 0.04 rad in the hand, a corner of the part reaches 1 mm lower: at 24.5 mm
         // above its centre the region is 0.5 mm too low for it, level it is not.
@@ -347,7 +318,7 @@ mod tests {
             objects: vec![block],
         };
         let (options, probes) = (PlanOptions::default(), Cell::new(0));
-        let p = planner(&robot, world, &options, &probes);
+        let p = Planner::new(&robot, world, &options, &probes);
         let margin = p.model.margins().held;
         let region = |back: f64| {
             let mut bw = Bounds::point();
@@ -379,7 +350,7 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let task = builtin::task("inspection").unwrap().unwrap();
         let (options, probes) = (PlanOptions::default(), Cell::new(0));
-        let p = planner(&robot, task.world.clone(), &options, &probes);
+        let p = Planner::new(&robot, task.world.clone(), &options, &probes);
         let truth = task.truth.unwrap();
         let tsr = truth.ground(&p.world.object_poses()).unwrap().keyframes[0]
             .tsr

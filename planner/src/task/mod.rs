@@ -134,24 +134,7 @@ pub(crate) fn plan_candidate(
     options: &PlanOptions,
     probes: &Cell<u64>,
 ) -> Result<Plan, PlanError> {
-    let mut planner = Planner {
-        robot,
-        model: RobotCollision::new(robot),
-        options,
-        rng: ChaCha8Rng::seed_from_u64(options.seed),
-        q: robot.ready().to_vec(),
-        world: world.clone(),
-        gripper: Gripper::Open,
-        width: robot.open_width(),
-        holding: None,
-        segments: Vec::new(),
-        events: Vec::new(),
-        t: 0.0,
-        pending_line: None,
-        just_released: None,
-        probes,
-        hand: HandModel::new(robot),
-    };
+    let mut planner = Planner::new(robot, world.clone(), options, probes);
     spec.validate()
         .and_then(|()| spec.check_references(world.names()))
         .map_err(|e| PlanError::Grounding(e.to_string()))?;
@@ -240,6 +223,34 @@ impl Step<'_> {
 }
 
 impl<'a> Planner<'a> {
+    /// A planner at the robot's ready configuration, hand open and empty, nothing planned yet,
+    /// its random choices drawn from `options.seed`.
+    fn new(
+        robot: &'a Robot,
+        world: World,
+        options: &'a PlanOptions,
+        probes: &'a Cell<u64>,
+    ) -> Planner<'a> {
+        Planner {
+            robot,
+            model: RobotCollision::new(robot),
+            options,
+            rng: ChaCha8Rng::seed_from_u64(options.seed),
+            q: robot.ready().to_vec(),
+            world,
+            gripper: Gripper::Open,
+            width: robot.open_width(),
+            holding: None,
+            segments: Vec::new(),
+            events: Vec::new(),
+            t: 0.0,
+            pending_line: None,
+            just_released: None,
+            probes,
+            hand: HandModel::new(robot),
+        }
+    }
+
     fn base(&self) -> Pose {
         self.world.robot_base
     }
