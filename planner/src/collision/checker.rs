@@ -383,7 +383,7 @@ impl<'a> Checker<'a> {
                     &self.scene.obstacles[n.obstacle],
                 );
                 // Beyond this distance the pair shortens nothing: GJK may stop there.
-                let reach = n.moved * pr.fraction - n.slack + DISTANCE_TOLERANCE;
+                let reach = pr.useful_clearance(n.moved, n.slack) + DISTANCE_TOLERANCE;
                 let exact = parry_convert::distance_up_to(
                     &b.world_shape,
                     &p.pose,
@@ -505,7 +505,7 @@ pub(super) fn clear_of(
     if pr.settled(moved, slack) {
         return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
     }
-    let reach = moved * pr.fraction - slack + DISTANCE_TOLERANCE;
+    let reach = pr.useful_clearance(moved, slack) + DISTANCE_TOLERANCE;
     match parry_convert::distance_up_to(shape, &placed.pose, &o.shape, &o.pose, reach) {
         Some(d) if d > 0.0 => {
             pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));

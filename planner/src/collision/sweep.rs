@@ -37,10 +37,16 @@ impl Proof<'_> {
         self.sweep.bounds[self.offsets[k] + from]
     }
 
+    /// The clearance beyond which an element moving `moved` with `slack` to spare shortens
+    /// nothing: a distance query need not be exact past it.
+    pub(super) fn useful_clearance(&self, moved: f64, slack: f64) -> f64 {
+        moved * self.fraction - slack
+    }
+
     /// Whether a clearance larger than 0 would shorten nothing: an element moving `moved`
     /// with `slack` to spare is already within the current fraction.
     pub(super) fn settled(&self, moved: f64, slack: f64) -> bool {
-        moved * self.fraction <= slack
+        self.useful_clearance(moved, slack) <= 0.0
     }
 
     /// Limits the fraction to what `slack` (clearance plus half the margin) allows an element
