@@ -20,16 +20,14 @@
 //! depends on how the arm would have moved after it.
 
 use crate::convert::{link_collider, to_sim};
-use crate::world::{Owner, SimWorld, ARM, FURNITURE, OBJECTS};
+use crate::world::{link_groups, Owner, SimWorld};
+use akl_planner::collision::ExactShape;
 use akl_planner::{Drive, HandModel, LocalBox, Motion};
 use akl_planner::{Geometry, Robot, ShapeRole};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;
 use rapier3d::pipeline::ActiveHooks;
-use rapier3d::prelude::{
-    ActiveCollisionTypes, ColliderHandle, InteractionGroups, InteractionTestMode, RigidBodyBuilder,
-    RigidBodyHandle,
-};
+use rapier3d::prelude::{ActiveCollisionTypes, ColliderHandle, RigidBodyBuilder, RigidBodyHandle};
 
 /// Friction of the finger pads and links (rubber-like pads).
 pub(crate) const LINK_FRICTION: f64 = 1.0;
@@ -322,17 +320,15 @@ impl SimArm {
                     .active_hooks(hooks)
                     .friction(LINK_FRICTION as f32)
                     .restitution(0.0)
-                    .collision_groups(InteractionGroups::new(
-                        ARM,
-                        FURNITURE | OBJECTS,
-                        InteractionTestMode::And,
-                    ))
+                    .collision_groups(link_groups())
                     .active_collision_types(ActiveCollisionTypes::all())
                     .user_data(Owner::Link(i).to_user_data());
                 let handle =
                     physics
                         .colliders
                         .insert_with_parent(collider, body, &mut physics.bodies);
+                sim.exact
+                    .insert(handle, ExactShape::of_element(&geometry), origin);
                 // A finger's first collider is its pad.
                 if let Some(k) = arm.hand.fingers.iter().position(|f| f.link == i) {
                     arm.pads[k].get_or_insert(handle);

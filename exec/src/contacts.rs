@@ -13,7 +13,8 @@
 //! - Any other contact of the arm or the held object is a collision as soon as it penetrates
 //!   deeper than [`ContactLimits::touch_depth`] or pushes at all ([`ContactLimits::touch_force`]).
 //!
-//! Forces are those kept up over [`SUSTAIN_STEPS`] steps, as a force sensor's filter reports
+//! A depth beyond a limit is rapier's single-precision reading confirmed on the exact shapes
+//! ([`crate::exact_depth`]). Forces are those kept up over [`SUSTAIN_STEPS`] steps, as a force sensor's filter reports
 //! them: the single-step impulse of a contact being made is not a push. Contacts between
 //! objects that nobody holds are physics, not verdicts.
 
@@ -260,12 +261,21 @@ impl ContactLog {
                 continue;
             };
             let allowed = verdict != Verdict::Forbidden;
-            let offending = match verdict {
-                Verdict::Grip => depth > limits.max_depth || force > limits.max_grip_force,
-                Verdict::Allowed => depth > limits.max_depth || force > limits.max_force,
-                Verdict::Brush => depth > limits.max_brush_depth || force > limits.max_brush_force,
-                Verdict::Forbidden => depth > limits.touch_depth || force > limits.touch_force,
+            let (max_depth, max_force) = match verdict {
+                Verdict::Grip => (limits.max_depth, limits.max_grip_force),
+                Verdict::Allowed => (limits.max_depth, limits.max_force),
+                Verdict::Brush => (limits.max_brush_depth, limits.max_brush_force),
+                Verdict::Forbidden => (limits.touch_depth, limits.touch_force),
             };
+            // A reading deep enough to offend is measured again on the exact shapes.
+            let depth = if depth > max_depth {
+                sim.exact
+                    .depth(&sim.physics, pair.collider1, pair.collider2)
+                    .unwrap_or(depth)
+            } else {
+                depth
+            };
+            let offending = depth > max_depth || force > max_force;
             if depth > limits.touch_depth || force > limits.touch_force {
                 self.deepest.update(depth.max(0.0), &a, &b, step.t);
                 self.strongest.update(force, &a, &b, step.t);
@@ -599,5 +609,123 @@ mod tests {
         assert_eq!(step(&mut log, 60.0), 40.0, "the smallest of the window");
         assert_eq!(step(&mut log, 60.0), 40.0);
         assert_eq!(step(&mut log, 60.0), 60.0);
+    }
+
+    /// Radius (metres) of the bottle the probe tests touch.
+    const BOTTLE_RADIUS: f64 = 0.05;
+
+    /// A bottle and a 2 cm cube owned by a robot link whose face stands `gap` metres off the
+    /// bottle's side (negative: pressed into it), facing it along a corner of the bottle's rest
+    /// prism, and what the last step's contacts say of it, nothing allowed: without `approach`,
+    /// one step with the bottle fastened where it stands (so it stays in place); with it, the
+    /// cube moving in at `approach` m/s for two steps towards the movable bottle.
+    /// `exact_radius` is the radius the bottle's exact shape is given (the reading's
+    /// confirmation).
+    fn probe(gap: f64, exact_radius: f64, approach: Option<f64>) -> (SimWorld, ContactLog) {
+        use crate::convert::to_sim;
+        use crate::world::link_groups;
+        use akl_planner::collision::ExactShape;
+        use akl_scene::{Object, Shape};
+        use akl_tsr::pose::pose_from_xyz_rpy;
+        use akl_tsr::Pose;
+        use rapier3d::prelude::ColliderBuilder;
+        use rapier3d::prelude::{ActiveCollisionTypes, RigidBodyBuilder, Vector};
+        let shape = |radius| Shape::Cylinder {
+            radius,
+            length: 0.2,
+        };
+        let world = World {
+            robot_base: Pose::identity(),
+            objects: vec![Object {
+                name: "bottle".into(),
+                shape: shape(BOTTLE_RADIUS),
+                pose: Pose::identity(),
+                movable: approach.is_some(),
+                mass: 0.5,
+                friction: 0.5,
+            }],
+        };
+        let mut sim = SimWorld::new(&world, &Physics::default());
+        let exact = ExactShape::of_object(&shape(exact_radius));
+        let bottle: Vec<_> = sim.physics.colliders.iter().map(|(h, _)| h).collect();
+        for h in bottle {
+            sim.exact.insert(h, exact.clone(), Pose::identity());
+        }
+        // The prism's first corner lies at π/24 about z.
+        let angle = std::f64::consts::PI / 24.0;
+        let centre = BOTTLE_RADIUS + gap + 0.01;
+        let pose = pose_from_xyz_rpy(
+            [centre * angle.cos(), centre * angle.sin(), 0.0],
+            [0.0, 0.0, angle],
+        );
+        let speed = approach.unwrap_or(0.0);
+        let inward = Vector::new(-angle.cos() as f32, -angle.sin() as f32, 0.0) * speed as f32;
+        let p = &mut sim.physics;
+        let body = p.bodies.insert(
+            RigidBodyBuilder::kinematic_velocity_based()
+                .pose(to_sim(&pose))
+                .linvel(inward)
+                .build(),
+        );
+        let cube = ColliderBuilder::cuboid(0.01, 0.01, 0.01)
+            .collision_groups(link_groups())
+            .active_collision_types(ActiveCollisionTypes::all())
+            .user_data(Owner::Link(0).to_user_data());
+        let cube = p.colliders.insert_with_parent(cube, body, &mut p.bodies);
+        let size = [0.02; 3];
+        let cube_shape = ExactShape::of_element(&akl_planner::Geometry::Box { size });
+        sim.exact.insert(cube, cube_shape, Pose::identity());
+        for _ in 0..if approach.is_some() { 2 } else { 1 } {
+            sim.step();
+        }
+        let roles = ContactRoles {
+            link_names: vec!["probe".into()],
+            roles: vec![LinkRole::default()],
+            mount: None,
+        };
+        let allow = Allowances::default();
+        let mut log = ContactLog::default();
+        log.scan(
+            &sim,
+            &roles,
+            &ContactLimits::default(),
+            &context(&allow, None),
+            None,
+        );
+        (sim, log)
+    }
+
+    /// The rest prism's corners stand 0.43 mm proud of a 5 cm bottle: a link 0.2 mm off the
+    /// bottle, moving in by less than that, reaches into the prism, which must neither push
+    /// the bottle nor be judged.
+    #[test]
+    fn the_robot_never_meets_a_rest_prism() {
+        let (sim, log) = probe(0.0002, BOTTLE_RADIUS, Some(0.01));
+        assert!(log.collisions().is_empty(), "{:?}", log.collisions());
+        let v = sim.physics.bodies[sim.objects[0].body].linvel();
+        assert!(v.x.hypot(v.y) < 1e-6, "the bottle was pushed at {v:?}");
+    }
+
+    /// The negative control: a link pressed 1 mm into the bottle touches it, and the depth is
+    /// the exact one.
+    #[test]
+    fn a_millimetre_press_is_a_collision() {
+        let (_, log) = probe(-0.001, BOTTLE_RADIUS, None);
+        let c = log.collisions();
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert_eq!((c[0].a.as_str(), c[0].b.as_str()), ("probe", "bottle"));
+        assert!((c[0].depth - 0.001).abs() < 2e-4, "{}", c[0].depth);
+    }
+
+    /// A reading past the limit is judged on the exact shapes: where they are apart (here the
+    /// bottle's exact shape is 2 mm thinner than its collider), there is no collision.
+    #[test]
+    fn a_deep_reading_is_confirmed_on_the_exact_shapes() {
+        let (_, log) = probe(-0.001, BOTTLE_RADIUS - 0.002, None);
+        assert!(log.collisions().is_empty(), "{:?}", log.collisions());
+        let (_, log) = probe(-0.003, BOTTLE_RADIUS - 0.002, None);
+        let c = log.collisions();
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!((c[0].depth - 0.001).abs() < 2e-4, "{}", c[0].depth);
     }
 }

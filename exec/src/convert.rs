@@ -40,32 +40,79 @@ pub(crate) fn vector_from_sim(v: Vector) -> Vector3<f64> {
 }
 
 /// A collider for a scene object, placed at `origin` (the object frame in its body's frame).
+///
+/// A cylinder, capsule or mesh object is a compound: its own shape, then the rest aids that let
+/// it rest as a real object does ([`rest_prism`], [`rest_slabs`]). The aids are for furniture
+/// and objects only: the robot meets the object's [`own_collider`] instead, because parry's
+/// single-precision contacts between two convex polyhedra misread them (a prism was read
+/// 6.2 mm deep into a UR5e gripper knuckle 5.1 mm away, which pushed a held bottle out of the
+/// hand).
 pub(crate) fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
-    match *shape {
-        Shape::Box { size } => ColliderBuilder::cuboid(
-            0.5 * size[0] as f32,
-            0.5 * size[1] as f32,
-            0.5 * size[2] as f32,
-        )
-        .position(to_sim(origin)),
-        Shape::Cylinder { radius, length } => {
-            ColliderBuilder::new(cylinder_object(radius, length)).position(to_sim(origin))
+    let (own, at) = own_shape(shape);
+    let aids = match *shape {
+        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+            rest_prism(radius, length).into_iter().collect()
         }
-        Shape::Capsule { radius, length } => {
-            ColliderBuilder::new(capsule_object(radius, length)).position(to_sim(origin))
-        }
-        Shape::Sphere { radius } => ColliderBuilder::ball(radius as f32).position(to_sim(origin)),
-        Shape::Mesh { ref hull, .. } => {
-            ColliderBuilder::new(mesh_object(hull.as_deref())).position(to_sim(origin))
-        }
+        Shape::Mesh { .. } => rest_slabs(&own),
+        Shape::Box { .. } | Shape::Sphere { .. } => Vec::new(),
+    };
+    if aids.is_empty() {
+        return ColliderBuilder::new(own).position(to_sim(&(origin * at)));
     }
+    let parts = std::iter::once((to_sim(&at), own))
+        .chain(aids.into_iter().map(|a| (SimPose::IDENTITY, a)))
+        .collect();
+    ColliderBuilder::new(SharedShape::compound(parts)).position(to_sim(origin))
+}
+
+/// A collider for a scene object's own shape alone, placed at `origin`: what the robot meets
+/// where [`object_collider`] holds rest aids.
+pub(crate) fn own_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
+    let (own, at) = own_shape(shape);
+    ColliderBuilder::new(own).position(to_sim(&(origin * at)))
+}
+
+/// A scene shape as rapier's shape, and the pose of rapier's shape in the object frame.
+fn own_shape(shape: &Shape) -> (SharedShape, Pose) {
+    match *shape {
+        Shape::Box { size } => (
+            SharedShape::cuboid(
+                0.5 * size[0] as f32,
+                0.5 * size[1] as f32,
+                0.5 * size[2] as f32,
+            ),
+            Pose::identity(),
+        ),
+        Shape::Cylinder { radius, length } => (
+            SharedShape::cylinder(0.5 * length as f32, radius as f32),
+            cylinder_axis(),
+        ),
+        Shape::Capsule { radius, length } => (
+            SharedShape::capsule_z(0.5 * length as f32, radius as f32),
+            Pose::identity(),
+        ),
+        Shape::Sphere { radius } => (SharedShape::ball(radius as f32), Pose::identity()),
+        Shape::Mesh { ref hull, .. } => (mesh_hull(hull.as_deref()), Pose::identity()),
+    }
+}
+
+/// A mesh object's hull, as the planner has it (rapier takes its centre of mass and inertia
+/// from it).
+fn mesh_hull(hull: Option<&ConvexHull>) -> SharedShape {
+    let points: Vec<Vector> = hull
+        .iter()
+        .flat_map(|h| h.vertices.iter())
+        .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
+        .collect();
+    // A mesh whose hull was measured when the task was loaded always has one; an unread one
+    // (refused by task validation) is a point, as the planner takes it.
+    SharedShape::convex_hull(&points).unwrap_or_else(|| SharedShape::ball(0.0))
 }
 
 /// How deep (metres) the slabs under a mesh object's many-cornered faces reach into it.
 const SLAB_DEPTH: f64 = 0.001;
 
-/// A mesh object as the simulation holds it: its hull, as the planner has it (rapier takes its
-/// centre of mass and inertia from it), and under each face of more than four corners a thin
+/// The rest slabs of a mesh object's hull: under each face of more than four corners a thin
 /// slab inside the hull whose face lies on that face, on four of its corners spread round it.
 ///
 /// parry makes the contact of a face with what it rests on from at most four of the face's
@@ -74,23 +121,13 @@ const SLAB_DEPTH: f64 = 0.001;
 /// hexagonal part stands on four corners along one side of its base and rocks (untouched on a
 /// shelf it tilted 0.019 rad and slid 1.8 mm). A slab's face gives four corners round the
 /// whole face; the hull keeps the object's shape.
-fn mesh_object(hull: Option<&ConvexHull>) -> SharedShape {
-    let points: Vec<Vector> = hull
-        .iter()
-        .flat_map(|h| h.vertices.iter())
-        .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
-        .collect();
-    // A mesh whose hull was measured when the task was loaded always has one; an unread one
-    // (refused by task validation) is a point, as the planner takes it.
-    let Some(hull) = SharedShape::convex_hull(&points) else {
-        return SharedShape::ball(0.0);
-    };
+fn rest_slabs(hull: &SharedShape) -> Vec<SharedShape> {
     let Some(polyhedron) = hull.as_convex_polyhedron() else {
-        return hull;
+        return Vec::new();
     };
     let points = polyhedron.points();
     let ring = polyhedron.vertices_adj_to_face();
-    let mut parts = vec![(SimPose::IDENTITY, hull.clone())];
+    let mut slabs = Vec::new();
     for face in polyhedron.faces() {
         let n = face.num_vertices_or_edges as usize;
         if n <= 4 {
@@ -102,40 +139,20 @@ fn mesh_object(hull: Option<&ConvexHull>) -> SharedShape {
             .map(|k| points[ring[first + k * n / 4] as usize])
             .flat_map(|p| [p, p + inward])
             .collect();
-        if let Some(slab) = SharedShape::convex_hull(&corners) {
-            parts.push((SimPose::IDENTITY, slab));
-        }
+        slabs.extend(SharedShape::convex_hull(&corners));
     }
-    if parts.len() == 1 {
-        hull
-    } else {
-        SharedShape::compound(parts)
-    }
+    slabs
 }
 
 /// Sides of the prism that keeps a lying cylinder from rolling.
-pub(crate) const PRISM_SIDES: usize = 24;
+const PRISM_SIDES: usize = 24;
 
 /// How far (metres) the prism stops short of each end of the cylinder.
 const PRISM_INSET: f64 = 0.001;
 
-/// A movable capsule as the simulation holds it: rapier's capsule, and over its cylindrical
-/// part the prism of [`cylinder_object`], which keeps it from rolling when it lies (a capsule
-/// touches a flat support along a line, as a cylinder does; standing on a round end, it falls,
-/// as it should).
-fn capsule_object(radius: f64, length: f64) -> SharedShape {
-    let capsule = SharedShape::capsule_z(0.5 * length as f32, radius as f32);
-    match prism(radius, length).filter(|_| length > 2.0 * PRISM_INSET) {
-        Some(p) => {
-            SharedShape::compound(vec![(SimPose::IDENTITY, capsule), (SimPose::IDENTITY, p)])
-        }
-        None => capsule,
-    }
-}
-
-/// A movable cylinder as the simulation holds it: rapier's exact cylinder and a
-/// [`PRISM_SIDES`]-sided prism whose faces touch it (so both rest at the same height), with
-/// faces normal to ±x and ±y, as one compound shape along z.
+/// The rest aid of a cylinder or capsule: a [`PRISM_SIDES`]-sided prism along z whose
+/// faces touch the cylindrical part (so both rest at the same height), with faces normal to ±x
+/// and ±y; `None` when the cylinder is too short to hold it.
 ///
 /// Each alone fails one way. rapier's exact cylinder lying on a box touches it along a line
 /// with no rolling resistance, and numerical error sets it rolling (a pipe resting on a rail
@@ -146,13 +163,11 @@ fn capsule_object(radius: f64, length: f64) -> SharedShape {
 /// (a 2 × 16 cm tube standing untouched tilted 0.08 rad within 2 s, and more sides made it
 /// worse; solver iterations and smaller steps did not help), while the exact cylinder's end
 /// face gives four points spread round its rim. Together, standing, the cylinder's points
-/// carry it; lying, the prism's face does.
-fn cylinder_object(radius: f64, length: f64) -> SharedShape {
-    let exact = SharedShape::cylinder(0.5 * length as f32, radius as f32);
-    let along_z = to_sim(&cylinder_axis());
-    let mut parts = vec![(along_z, exact)];
-    parts.extend(prism(radius, length).map(|p| (SimPose::IDENTITY, p)));
-    SharedShape::compound(parts)
+/// carry it; lying, the prism's face does. A capsule touches a flat support along a line as a
+/// cylinder does, and gets the same prism over its cylindrical part (standing on a round end,
+/// it falls, as it should).
+fn rest_prism(radius: f64, length: f64) -> Option<SharedShape> {
+    prism(radius, length).filter(|_| length > 2.0 * PRISM_INSET)
 }
 
 /// The [`PRISM_SIDES`]-sided prism along z whose faces touch a cylinder of `radius`, stopping
@@ -179,12 +194,11 @@ fn prism(radius: f64, length: f64) -> Option<SharedShape> {
 pub(crate) fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuilder {
     match *geometry {
         Geometry::Capsule { radius, length } => {
-            ColliderBuilder::capsule_z(0.5 * length as f32, radius as f32).position(to_sim(origin))
+            own_collider(&Shape::Capsule { radius, length }, origin)
         }
         Geometry::Box { size } => object_collider(&Shape::Box { size }, origin),
         Geometry::Cylinder { radius, length } => {
-            ColliderBuilder::cylinder(0.5 * length as f32, radius as f32)
-                .position(to_sim(&(origin * cylinder_axis())))
+            own_collider(&Shape::Cylinder { radius, length }, origin)
         }
         Geometry::Sphere { radius } => object_collider(&Shape::Sphere { radius }, origin),
         // The hull's own faces; should rapier refuse them, the capsule that holds the hull.

@@ -14,6 +14,7 @@ mod checks;
 mod contacts;
 mod convert;
 mod error;
+mod exact_depth;
 mod grasp;
 mod interrupt;
 mod junit;

@@ -1,7 +1,9 @@
 //! The task's world in rapier3d: furniture as fixed bodies, movable objects as dynamic bodies
 //! with their mass and friction, gravity along −z, a fixed time step.
 
-use crate::convert::{from_sim, object_collider, to_sim, vector_from_sim};
+use crate::convert::{from_sim, object_collider, own_collider, to_sim, vector_from_sim};
+use crate::exact_depth::ExactShapes;
+use akl_planner::collision::ExactShape;
 use akl_scene::World;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
@@ -18,6 +20,19 @@ pub(crate) const OBJECTS: Group = Group::GROUP_2;
 /// Collision group of the robot's links; links never collide with each other in the
 /// simulation (the plan is checked for self-collision, and neighbouring links' models overlap).
 pub(crate) const ARM: Group = Group::GROUP_3;
+/// Collision group of the colliders that show the robot an object's own shape, where the
+/// object's collider holds rest aids besides ([`crate::convert::object_collider`]).
+pub(crate) const OWN_SHAPES: Group = Group::GROUP_4;
+
+/// The collision groups of a robot link's colliders: it meets furniture and objects (their own
+/// shapes), never another link.
+pub(crate) fn link_groups() -> InteractionGroups {
+    InteractionGroups::new(
+        ARM,
+        FURNITURE | OBJECTS | OWN_SHAPES,
+        InteractionTestMode::And,
+    )
+}
 
 /// Whether an object moving at `linear` m/s and `angular` rad/s is at rest for the rest check
 /// with `max_speed`.
@@ -119,6 +134,8 @@ pub struct SimWorld {
     pub(crate) physics: PhysicsWorld,
     /// The scene objects, in the task's order.
     pub(crate) objects: Vec<SimObject>,
+    /// The exact shape behind each collider, to confirm deep contact readings.
+    pub(crate) exact: ExactShapes,
     template: World,
     unsolved: UnsolvedPairs,
     time: f64,
@@ -143,6 +160,7 @@ impl SimWorld {
         p.contact_softness.natural_frequency *= 4.0;
         p.static_contact_softness.natural_frequency *= 4.0;
         let mut objects = Vec::with_capacity(world.objects.len());
+        let mut exact = ExactShapes::default();
         for (i, o) in world.objects.iter().enumerate() {
             let body = if o.movable {
                 RigidBodyBuilder::dynamic()
@@ -157,7 +175,16 @@ impl SimWorld {
             } else {
                 (FURNITURE, ARM | OBJECTS, ActiveCollisionTypes::default())
             };
-            let mut collider = object_collider(&o.shape, &Pose::identity())
+            let collider = object_collider(&o.shape, &Pose::identity());
+            // Rest aids are for furniture and objects; the robot meets the object's own shape,
+            // in a second, massless collider.
+            let aided = collider.shape.as_compound().is_some();
+            let filter = if aided {
+                filter.difference(ARM)
+            } else {
+                filter
+            };
+            let mut collider = collider
                 .friction(o.friction as f32)
                 .restitution(0.0)
                 .collision_groups(InteractionGroups::new(
@@ -170,9 +197,28 @@ impl SimWorld {
             if o.movable {
                 collider = collider.mass(o.mass as f32);
             }
-            physics
+            let exact_shape = ExactShape::of_object(&o.shape);
+            let handle = physics
                 .colliders
                 .insert_with_parent(collider, body, &mut physics.bodies);
+            exact.insert(handle, exact_shape.clone(), Pose::identity());
+            if aided {
+                let own = own_collider(&o.shape, &Pose::identity())
+                    .density(0.0)
+                    .friction(o.friction as f32)
+                    .restitution(0.0)
+                    .collision_groups(InteractionGroups::new(
+                        OWN_SHAPES,
+                        ARM,
+                        InteractionTestMode::And,
+                    ))
+                    .active_collision_types(ActiveCollisionTypes::all())
+                    .user_data(Owner::Object(i).to_user_data());
+                let handle = physics
+                    .colliders
+                    .insert_with_parent(own, body, &mut physics.bodies);
+                exact.insert(handle, exact_shape, Pose::identity());
+            }
             objects.push(SimObject {
                 name: o.name.clone(),
                 movable: o.movable,
@@ -182,6 +228,7 @@ impl SimWorld {
         SimWorld {
             physics,
             objects,
+            exact,
             template: world.clone(),
             unsolved: UnsolvedPairs::default(),
             time: 0.0,

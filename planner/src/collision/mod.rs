@@ -25,6 +25,7 @@
 
 mod checker;
 mod cull;
+mod exact;
 mod held;
 mod hit;
 mod model;
@@ -36,6 +37,7 @@ mod sweep;
 mod tests;
 
 pub use checker::Checker;
+pub use exact::ExactShape;
 pub use held::Held;
 pub use hit::Hit;
 pub use model::{Margins, RobotCollision};
