@@ -68,14 +68,14 @@ fn world_during(world: &World, plan: &Plan, segment: &Segment) -> World {
 }
 
 /// The object held during `segment`, placed as it was grasped.
-fn held_during(world: &World, plan: &Plan, segment: &Segment, margin: f64) -> Option<Held> {
+fn held_during(world: &World, plan: &Plan, segment: &Segment, margins: &Margins) -> Option<Held> {
     let name = segment.holding.as_ref()?;
     let grasp = plan
         .events
         .iter()
         .rfind(|e| e.action == GripperAction::Close && e.object == *name && e.t <= segment.start)?;
     let shape = world.object(name)?.shape.clone();
-    Some(Held::new(name, shape, grasp.object_pose, margin))
+    Some(Held::new(name, shape, grasp.object_pose, margins))
 }
 
 /// Every violation found when sampling `plan` every `options.dt` seconds in `world` (the
@@ -103,7 +103,7 @@ pub(crate) fn recheck(
     let base = world.robot_base;
     for (k, segment) in plan.segments.iter().enumerate() {
         let w = world_during(world, plan, segment);
-        let held = held_during(world, plan, segment, model.margins().held);
+        let held = held_during(world, plan, segment, &model.margins());
         let without: Vec<&str> = held.iter().map(|h| h.name.as_str()).collect();
         let scene = Scene::new(&w, &without);
         let checker = Checker::new(robot, &model, &scene);

@@ -343,7 +343,8 @@ impl<'a> Checker<'a> {
                     return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }
-            let slack = 0.5 * (h.margin + 0.5 * m.self_);
+            let slack = 0.5 * (h.arm_margin + 0.5 * m.self_);
+            let extent = extent - h.margin + h.arm_margin;
             for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
                 if b.group == Group::Hand {
                     continue;
@@ -360,7 +361,7 @@ impl<'a> Checker<'a> {
                     }
                     continue;
                 }
-                if parry_convert::intersects(&b.self_shape, &p.pose, &h.grown, &pose) {
+                if parry_convert::intersects(&b.self_shape, &p.pose, &h.near_arm, &pose) {
                     return Err(Hit::HeldRobot(h.name.clone(), links[b.link].name.clone()));
                 }
                 if let Some(pr) = proof.as_mut() {

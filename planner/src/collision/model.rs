@@ -102,7 +102,7 @@ pub struct Margins {
     pub arm: f64,
     /// Hand links against the world.
     pub hand: f64,
-    /// A held object against the world and the arm.
+    /// A held object against the world (against the arm, the larger of this and `hand`).
     pub held: f64,
     /// Between links.
     pub self_: f64,

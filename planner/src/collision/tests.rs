@@ -104,6 +104,56 @@ mod checks {
         assert_eq!(checker.check(&out, 0.08, None, &none()), Some(Hit::Limits));
     }
 
+    /// A held object keeps the hand margin from the arm's own links (its place in the hand is
+    /// only as good as the perception the grasp was planned on), not the smaller held margin
+    /// it keeps from the world: moved up from the elbow, a held ball must stand about the
+    /// difference (3 mm for the Panda) further off before the check calls it free.
+    #[test]
+    fn a_held_object_keeps_the_hand_margin_from_the_arm() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let world = World {
+            robot_base: Pose::identity(),
+            objects: Vec::new(),
+        };
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let q = robot.ready();
+        let elbow = robot
+            .links()
+            .iter()
+            .position(|l| l.name == "fer_link4")
+            .unwrap();
+        let from = robot.link_poses(q, 0.08)[elbow].translation.vector;
+        let tcp = robot.tcp_pose(q);
+        let margins = model.margins();
+        assert!(margins.hand > margins.held + 0.002);
+        let held_margin_only = Margins {
+            hand: margins.held,
+            ..margins
+        };
+        // The least rise (0.1 mm steps) at which a 1 cm ball is free with `m`.
+        let free_from = |m: &Margins| {
+            (0..3000)
+                .map(|k| k as f64 * 1e-4)
+                .find(|&t| {
+                    let centre = Pose::from_parts(
+                        (from + akl_tsr::nalgebra::Vector3::z() * t).into(),
+                        Default::default(),
+                    );
+                    let ball = akl_scene::Shape::Sphere { radius: 0.01 };
+                    let held = Held::new("ball", ball, tcp.inverse() * centre, m);
+                    checker.check(q, 0.08, Some(&held), &none()).is_none()
+                })
+                .unwrap()
+        };
+        let (near, far) = (free_from(&held_margin_only), free_from(&margins));
+        assert!(
+            far - near > 0.8 * (margins.hand - margins.held),
+            "free from {near:.4} m with the held margin, {far:.4} m with the hand's"
+        );
+    }
+
     #[test]
     fn a_held_block_collides_with_its_support_unless_allowed() {
         let robot = Robot::panda().unwrap();
@@ -116,7 +166,10 @@ mod checks {
             "block_a",
             block.shape.clone(),
             grasp.inverse() * block.pose,
-            0.001,
+            &Margins {
+                held: 0.001,
+                ..model.margins()
+            },
         );
         let scene = Scene::new(&task.world, &["block_a"]);
         let checker = Checker::new(&robot, &model, &scene);

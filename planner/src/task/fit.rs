@@ -225,8 +225,9 @@ mod tests {
             Translation3::new(0.0, 0.0, above),
             UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI + tilt),
         );
+        let margins = planner.model.margins();
         planner.holding = Some(Holding {
-            held: Held::new("part", part, in_tcp, 0.002),
+            held: Held::new("part", part, in_tcp, &margins),
             resting_on: None,
         });
     }

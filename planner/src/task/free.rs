@@ -207,7 +207,7 @@ impl Planner<'_> {
                     object,
                     o.shape.clone(),
                     centred_in_hand(pose, &o.pose, &o.shape),
-                    self.model.margins().held,
+                    &self.model.margins(),
                 );
                 let width = grasp_width(&o.shape, &o.pose, pose).min(self.robot.open_width());
                 let mut world = self.world.clone();

@@ -44,7 +44,7 @@ impl Planner<'_> {
             object_pose: in_tcp,
         });
         self.holding = Some(Holding {
-            held: Held::new(object, o.shape, in_tcp, self.model.margins().held),
+            held: Held::new(object, o.shape, in_tcp, &self.model.margins()),
             resting_on: support.clone(),
         });
         let resting = Step {

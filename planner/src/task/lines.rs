@@ -195,7 +195,7 @@ impl Planner<'_> {
                     object,
                     o.shape.clone(),
                     centred_in_hand(pose, &o.pose, &o.shape),
-                    self.model.margins().held,
+                    &self.model.margins(),
                 ),
                 resting_on: world.support_of(object).map(|s| s.name.clone()),
             });
