@@ -46,8 +46,8 @@ pub(crate) const PAD_CONTACT: f64 = 5e-4;
 pub(crate) struct PadReading {
     /// The nearest object (index), among those within rapier's contact prediction of the pad.
     pub object: Option<usize>,
-    /// Its distance from the pad, from the exact shapes at their current poses (metres;
-    /// infinite when nothing is near).
+    /// Its distance from the pad: a certified lower bound between the exact shapes at their
+    /// current poses, in double precision (metres; infinite when nothing is near).
     pub gap: f64,
     /// Force of the pad's contacts in the last step (N).
     pub force: f64,

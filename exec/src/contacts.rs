@@ -270,7 +270,12 @@ impl ContactLog {
             // A reading deep enough to offend is measured again on the exact shapes.
             let depth = if depth > max_depth {
                 sim.exact
-                    .depth(&sim.physics, pair.collider1, pair.collider2)
+                    .depth(
+                        &sim.physics.colliders,
+                        &sim.physics.bodies,
+                        pair.collider1,
+                        pair.collider2,
+                    )
                     .unwrap_or(depth)
             } else {
                 depth

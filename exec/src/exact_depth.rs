@@ -10,7 +10,7 @@
 use crate::convert::from_sim;
 use akl_planner::collision::ExactShape;
 use akl_tsr::Pose;
-use rapier3d::prelude::{ColliderHandle, PhysicsWorld};
+use rapier3d::prelude::{ColliderHandle, ColliderSet, RigidBodySet};
 use std::collections::HashMap;
 
 /// The exact shape of each collider and its frame in the collider's body frame.
@@ -25,21 +25,44 @@ impl ExactShapes {
         self.shapes.insert(collider, (shape, origin));
     }
 
+    /// The exact shape of `c` and its world pose, from its body's current pose.
+    fn placed(
+        &self,
+        colliders: &ColliderSet,
+        bodies: &RigidBodySet,
+        c: ColliderHandle,
+    ) -> Option<(&ExactShape, Pose)> {
+        let (shape, origin) = self.shapes.get(&c)?;
+        let body = colliders.get(c)?.parent()?;
+        Some((shape, from_sim(bodies.get(body)?.position()) * origin))
+    }
+
     /// How deep the exact shapes of colliders `a` and `b` interpenetrate at their bodies'
     /// current poses (metres, 0 when apart); `None` when either has no exact shape.
     pub(crate) fn depth(
         &self,
-        physics: &PhysicsWorld,
+        colliders: &ColliderSet,
+        bodies: &RigidBodySet,
         a: ColliderHandle,
         b: ColliderHandle,
     ) -> Option<f64> {
-        let placed = |c: ColliderHandle| {
-            let (shape, origin) = self.shapes.get(&c)?;
-            let body = physics.colliders.get(c)?.parent()?;
-            let pose = from_sim(physics.bodies.get(body)?.position());
-            Some((shape, pose * origin))
-        };
-        let ((sa, pa), (sb, pb)) = (placed(a)?, placed(b)?);
+        let (sa, pa) = self.placed(colliders, bodies, a)?;
+        let (sb, pb) = self.placed(colliders, bodies, b)?;
         sa.penetration(&pa, sb, &pb)
+    }
+
+    /// A certified lower bound on the distance between the exact shapes of colliders `a` and
+    /// `b` at their bodies' current poses (metres, 0 when they touch); `None` when either has
+    /// no exact shape.
+    pub(crate) fn distance(
+        &self,
+        colliders: &ColliderSet,
+        bodies: &RigidBodySet,
+        a: ColliderHandle,
+        b: ColliderHandle,
+    ) -> Option<f64> {
+        let (sa, pa) = self.placed(colliders, bodies, a)?;
+        let (sb, pb) = self.placed(colliders, bodies, b)?;
+        sa.distance(&pa, sb, &pb)
     }
 }

@@ -24,7 +24,6 @@ use crate::world::{Owner, SimWorld};
 use akl_planner::{squared_in_hand, squaring_turn, Finger};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
-use rapier3d::parry::query::distance;
 use rapier3d::prelude::{FixedJointBuilder, ImpulseJointHandle, RigidBodyType, SpringCoefficients};
 use serde::Serialize;
 
@@ -66,25 +65,20 @@ pub(crate) fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
         let Some(collider) = arm.pad_collider(k) else {
             continue;
         };
-        let Some(pad) = sim.physics.colliders.get(collider) else {
-            continue;
-        };
         for pair in sim.physics.narrow_phase.contact_pairs_with(collider) {
             let other = if pair.collider1 == collider {
                 pair.collider2
             } else {
                 pair.collider1
             };
-            let (Some(Owner::Object(o)), Some(c)) =
-                (sim.owner(other), sim.physics.colliders.get(other))
-            else {
+            let Some(Owner::Object(o)) = sim.owner(other) else {
                 continue;
             };
             reading.force += f64::from(pair.total_impulse_magnitude()) / sim.dt();
-            let Ok(d) = distance(pad.position(), pad.shape(), c.position(), c.shape()) else {
+            let (colliders, bodies) = (&sim.physics.colliders, &sim.physics.bodies);
+            let Some(d) = sim.exact.distance(colliders, bodies, collider, other) else {
                 continue;
             };
-            let d = f64::from(d.distance);
             if d < reading.gap {
                 reading.gap = d;
                 reading.object = Some(o);

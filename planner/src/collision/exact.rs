@@ -38,14 +38,22 @@ impl ExactShape {
         ExactShape { shape, offset }
     }
 
+    /// A certified lower bound on the distance between this shape at `pose` and `other` at
+    /// `other_pose` (metres; 0 when they touch or overlap), `None` if parry has no query for
+    /// the pair.
+    pub fn distance(&self, pose: &Pose, other: &ExactShape, other_pose: &Pose) -> Option<f64> {
+        let (pa, pb) = (pose * self.offset, other_pose * other.offset);
+        parry_convert::distance(&self.shape, &pa, &other.shape, &pb)
+    }
+
     /// How deep this shape at `pose` and `other` at `other_pose` interpenetrate (metres): 0
     /// when a separating slab proves them apart, else the penetration depth; `None` if parry
     /// has no query for the pair.
     pub fn penetration(&self, pose: &Pose, other: &ExactShape, other_pose: &Pose) -> Option<f64> {
-        let (pa, pb) = (pose * self.offset, other_pose * other.offset);
-        if parry_convert::distance(&self.shape, &pa, &other.shape, &pb)? > 0.0 {
+        if self.distance(pose, other, other_pose)? > 0.0 {
             return Some(0.0);
         }
+        let (pa, pb) = (pose * self.offset, other_pose * other.offset);
         parry_convert::penetration(&self.shape, &pa, &other.shape, &pb)
     }
 }
@@ -77,6 +85,16 @@ mod tests {
             .penetration(&Pose::identity(), &plate(), &plate_pose)
             .unwrap();
         assert!((depth - 0.001).abs() < 1e-5, "{depth}");
+    }
+
+    #[test]
+    fn a_plate_beside_a_cylinder_is_its_gap_away() {
+        let plate_pose =
+            pose_from_xyz_rpy([0.0395, 0.0, 0.0], [0.0, std::f64::consts::FRAC_PI_2, 0.0]);
+        let d = cylinder()
+            .distance(&Pose::identity(), &plate(), &plate_pose)
+            .unwrap();
+        assert!((d - 0.0025).abs() < 1e-6, "{d}");
     }
 
     #[test]
