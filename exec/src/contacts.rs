@@ -14,9 +14,9 @@
 //!   deeper than [`ContactLimits::touch_depth`] or pushes at all ([`ContactLimits::touch_force`]).
 //!
 //! A depth beyond a limit is rapier's single-precision reading confirmed on the exact shapes
-//! ([`crate::exact_depth`]). Forces are those kept up over [`SUSTAIN_STEPS`] steps, as a force sensor's filter reports
-//! them: the single-step impulse of a contact being made is not a push. Contacts between
-//! objects that nobody holds are physics, not verdicts.
+//! ([`crate::exact_depth`]). Forces are those kept up over [`SUSTAIN_STEPS`] steps, as a
+//! force sensor's filter reports them: the single-step impulse of a contact being made is not
+//! a push. Contacts between objects that nobody holds are physics, not verdicts.
 
 use crate::world::{Owner, SimWorld};
 use akl_planner::collision::Scene;
@@ -273,8 +273,7 @@ impl ContactLog {
                     .depth(
                         &sim.physics.colliders,
                         &sim.physics.bodies,
-                        pair.collider1,
-                        pair.collider2,
+                        [pair.collider1, pair.collider2],
                     )
                     .unwrap_or(depth)
             } else {

@@ -25,44 +25,44 @@ impl ExactShapes {
         self.shapes.insert(collider, (shape, origin));
     }
 
-    /// The exact shape of `c` and its world pose, from its body's current pose.
+    /// The exact shapes of colliders `a` and `b` and their world poses, from their bodies'
+    /// current poses; `None` when either has no exact shape.
     fn placed(
         &self,
         colliders: &ColliderSet,
         bodies: &RigidBodySet,
-        c: ColliderHandle,
-    ) -> Option<(&ExactShape, Pose)> {
-        let (shape, origin) = self.shapes.get(&c)?;
-        let body = colliders.get(c)?.parent()?;
-        Some((shape, from_sim(bodies.get(body)?.position()) * origin))
+        [a, b]: [ColliderHandle; 2],
+    ) -> Option<[(&ExactShape, Pose); 2]> {
+        let one = |c: ColliderHandle| {
+            let (shape, origin) = self.shapes.get(&c)?;
+            let body = colliders.get(c)?.parent()?;
+            Some((shape, from_sim(bodies.get(body)?.position()) * origin))
+        };
+        Some([one(a)?, one(b)?])
     }
 
-    /// How deep the exact shapes of colliders `a` and `b` interpenetrate at their bodies'
+    /// How deep the exact shapes of the colliders `pair` interpenetrate at their bodies'
     /// current poses (metres, 0 when apart); `None` when either has no exact shape.
     pub(crate) fn depth(
         &self,
         colliders: &ColliderSet,
         bodies: &RigidBodySet,
-        a: ColliderHandle,
-        b: ColliderHandle,
+        pair: [ColliderHandle; 2],
     ) -> Option<f64> {
-        let (sa, pa) = self.placed(colliders, bodies, a)?;
-        let (sb, pb) = self.placed(colliders, bodies, b)?;
+        let [(sa, pa), (sb, pb)] = self.placed(colliders, bodies, pair)?;
         sa.penetration(&pa, sb, &pb)
     }
 
-    /// A certified lower bound on the distance between the exact shapes of colliders `a` and
-    /// `b` at their bodies' current poses (metres, 0 when they touch); `None` when either has
-    /// no exact shape.
+    /// A certified lower bound on the distance between the exact shapes of the colliders
+    /// `pair` at their bodies' current poses (metres, 0 when they touch); `None` when either
+    /// has no exact shape.
     pub(crate) fn distance(
         &self,
         colliders: &ColliderSet,
         bodies: &RigidBodySet,
-        a: ColliderHandle,
-        b: ColliderHandle,
+        pair: [ColliderHandle; 2],
     ) -> Option<f64> {
-        let (sa, pa) = self.placed(colliders, bodies, a)?;
-        let (sb, pb) = self.placed(colliders, bodies, b)?;
+        let [(sa, pa), (sb, pb)] = self.placed(colliders, bodies, pair)?;
         sa.distance(&pa, sb, &pb)
     }
 }

@@ -76,7 +76,7 @@ pub(crate) fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
             };
             reading.force += f64::from(pair.total_impulse_magnitude()) / sim.dt();
             let (colliders, bodies) = (&sim.physics.colliders, &sim.physics.bodies);
-            let Some(d) = sim.exact.distance(colliders, bodies, collider, other) else {
+            let Some(d) = sim.exact.distance(colliders, bodies, [collider, other]) else {
                 continue;
             };
             if d < reading.gap {

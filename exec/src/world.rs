@@ -8,9 +8,9 @@ use akl_scene::World;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use rapier3d::prelude::{
-    ActiveCollisionTypes, ColliderHandle, Group, InteractionGroups, InteractionTestMode,
-    PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SolverFlags,
-    Vector,
+    ActiveCollisionTypes, ColliderBuilder, ColliderHandle, Group, InteractionGroups,
+    InteractionTestMode, PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyBuilder,
+    RigidBodyHandle, SolverFlags, Vector,
 };
 
 /// Collision group of furniture (fixed objects).
@@ -187,16 +187,16 @@ impl SimWorld {
             } else {
                 filter
             };
-            let mut collider = collider
-                .friction(o.friction as f32)
-                .restitution(0.0)
-                .collision_groups(InteractionGroups::new(
-                    membership,
-                    filter,
-                    InteractionTestMode::And,
-                ))
-                .active_collision_types(types)
-                .user_data(Owner::Object(i).to_user_data());
+            // Friction, restitution, groups and owner, alike for both of an object's colliders.
+            let finish = |c: ColliderBuilder, groups, types| {
+                c.friction(o.friction as f32)
+                    .restitution(0.0)
+                    .collision_groups(groups)
+                    .active_collision_types(types)
+                    .user_data(Owner::Object(i).to_user_data())
+            };
+            let world_groups = InteractionGroups::new(membership, filter, InteractionTestMode::And);
+            let mut collider = finish(collider, world_groups, types);
             if o.movable {
                 collider = collider.mass(o.mass as f32);
             }
@@ -206,17 +206,13 @@ impl SimWorld {
                 .insert_with_parent(collider, body, &mut physics.bodies);
             exact.insert(handle, exact_shape.clone(), Pose::identity());
             if aided {
-                let own = own_collider(&o.shape, &Pose::identity())
-                    .density(0.0)
-                    .friction(o.friction as f32)
-                    .restitution(0.0)
-                    .collision_groups(InteractionGroups::new(
-                        OWN_SHAPES,
-                        ARM,
-                        InteractionTestMode::And,
-                    ))
-                    .active_collision_types(ActiveCollisionTypes::all())
-                    .user_data(Owner::Object(i).to_user_data());
+                let robot_groups =
+                    InteractionGroups::new(OWN_SHAPES, ARM, InteractionTestMode::And);
+                let own = finish(
+                    own_collider(&o.shape, &Pose::identity()).density(0.0),
+                    robot_groups,
+                    ActiveCollisionTypes::all(),
+                );
                 let handle = physics
                     .colliders
                     .insert_with_parent(own, body, &mut physics.bodies);
