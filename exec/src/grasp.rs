@@ -88,6 +88,27 @@ pub(crate) fn read_pads(sim: &SimWorld, arm: &SimArm) -> [PadReading; 2] {
     pads
 }
 
+/// What pushed object `object` hardest in the last step (another object, or a robot link),
+/// and how hard (N); `None` when nothing did. Names the cause when a weld breaks: a held
+/// object struck in passing breaks loose in one step, too briefly for a contact verdict.
+pub(crate) fn strongest_push(sim: &SimWorld, object: usize) -> Option<(Owner, f64)> {
+    let me = Owner::Object(object);
+    sim.physics
+        .narrow_phase
+        .contact_pairs()
+        .filter_map(|pair| {
+            let (a, b) = (sim.owner(pair.collider1)?, sim.owner(pair.collider2)?);
+            let other = match (a == me, b == me) {
+                (true, false) => b,
+                (false, true) => a,
+                _ => return None,
+            };
+            let force = f64::from(pair.total_impulse_magnitude()) / sim.dt();
+            (force > 0.0).then_some((other, force))
+        })
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+}
+
 /// How a closed hand holds an object, measured on the simulated bodies.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GraspMeasure {
@@ -430,5 +451,43 @@ mod tests {
         let (peak, capacity, slip) = lift(20.0);
         assert!(peak > capacity, "{peak} N of {capacity} N");
         assert!(slip > 0.005, "the block fell out of the hand: slip {slip}");
+    }
+
+    /// A block resting on a table is pushed hardest by the table, with its weight.
+    #[test]
+    fn the_strongest_push_on_a_resting_block_is_its_support() {
+        let world = World {
+            robot_base: Pose::identity(),
+            objects: vec![
+                Object {
+                    name: "table".into(),
+                    shape: Shape::Box {
+                        size: [0.6, 0.6, 0.04],
+                    },
+                    pose: pose_from_xyz([0.5, 0.0, -0.02]),
+                    movable: false,
+                    mass: 0.0,
+                    friction: 0.6,
+                },
+                Object {
+                    name: "block".into(),
+                    shape: Shape::Box {
+                        size: [0.05, 0.05, 0.08],
+                    },
+                    pose: pose_from_xyz([0.5, 0.0, 0.04]),
+                    movable: true,
+                    mass: 0.2,
+                    friction: 0.9,
+                },
+            ],
+        };
+        let mut sim = SimWorld::new(&world, &Physics::default());
+        for _ in 0..120 {
+            sim.step();
+        }
+        let (by, force) = strongest_push(&sim, 1).unwrap();
+        assert_eq!(by, Owner::Object(0));
+        assert!((force - 0.2 * 9.81).abs() < 0.1, "{force} N");
+        assert_eq!(strongest_push(&sim, 0).map(|p| p.0), Some(Owner::Object(1)));
     }
 }

@@ -5,8 +5,8 @@
 
 use super::observations::{GraspEvent, Observations, ReleaseEvent};
 use crate::arm::{FingerCommand, SimArm};
-use crate::grasp::{measure, read_pads, square, GraspLimits, Weld};
-use crate::world::SimWorld;
+use crate::grasp::{measure, read_pads, square, strongest_push, GraspLimits, Weld};
+use crate::world::{Owner, SimWorld};
 use akl_planner::{GripperAction, Plan, SegmentKind};
 use akl_tsr::{Pose, TaskSpec};
 
@@ -52,11 +52,14 @@ pub(super) struct Gripper {
     grasp_force: f64,
     open_width: f64,
     slip_limit: f64,
+    /// The robot's link names, to say which pushed a held object loose.
+    link_names: Vec<String>,
 }
 
 impl Gripper {
     /// The gripper commands of `plan`, closing on the objects `spec` names; a held object
-    /// moving more than `slip_limit` (metres) in the hand is noted as slipped.
+    /// moving more than `slip_limit` (metres) in the hand is noted as slipped. `link_names`
+    /// are the robot's, by link index.
     pub(super) fn new(
         plan: &Plan,
         spec: &TaskSpec,
@@ -64,6 +67,7 @@ impl Gripper {
         grasp_force: f64,
         open_width: f64,
         slip_limit: f64,
+        link_names: Vec<String>,
     ) -> Gripper {
         let mut commands: Vec<(f64, Command)> = plan
             .events
@@ -99,6 +103,7 @@ impl Gripper {
             grasp_force,
             open_width,
             slip_limit,
+            link_names,
         }
     }
 
@@ -187,7 +192,19 @@ impl Gripper {
                 let load = weld.load(sim);
                 event.peak_load = event.peak_load.max(load.force);
                 if weld.overloaded(&load) {
-                    event.broke_by = Some(weld.overload_text(&load));
+                    let pushed = match strongest_push(sim, h.object) {
+                        Some((Owner::Object(o), f)) => {
+                            format!(", as {} pushed it with {f:.1} N", sim.objects[o].name)
+                        }
+                        Some((Owner::Link(l), f)) => format!(
+                            ", as {} pushed it with {f:.1} N",
+                            self.link_names
+                                .get(l)
+                                .map_or("a robot link", String::as_str)
+                        ),
+                        None => String::new(),
+                    };
+                    event.broke_by = Some(format!("{}{pushed}", weld.overload_text(&load)));
                     weld.release(sim);
                     h.weld = None;
                     event.broke_at = Some(t);

@@ -86,6 +86,7 @@ pub fn simulate(
         options.drives.grasp_force,
         robot.open_width(),
         options.slip_limit,
+        robot.links().iter().map(|l| l.name.clone()).collect(),
     );
     let roles = ContactRoles::new(robot, world);
     let labels: Vec<String> = plan
