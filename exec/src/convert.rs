@@ -39,15 +39,20 @@ pub(crate) fn vector_from_sim(v: Vector) -> Vector3<f64> {
     Vector3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z))
 }
 
-/// A collider for a scene object, placed at `origin` (the object frame in its body's frame).
+/// The colliders of a scene object, placed at `origin` (the object frame in its body's frame):
+/// the one furniture and other objects meet, and, where that one differs from the object's own
+/// shape, a second of the own shape alone for the robot to meet.
 ///
-/// A cylinder, capsule or mesh object is a compound: its own shape, then the rest aids that let
-/// it rest as a real object does ([`rest_prism`], [`rest_slabs`]). The aids are for furniture
-/// and objects only: the robot meets the object's [`own_collider`] instead, because parry's
+/// A cylinder, capsule or mesh object meets the world as a compound: its own shape, then the
+/// rest aids that let it rest as a real object does ([`rest_prism`], [`rest_slabs`]). The aids
+/// are for furniture and objects only: the robot meets the own shape instead, because parry's
 /// single-precision contacts between two convex polyhedra misread them (a prism was read
 /// 6.2 mm deep into a UR5e gripper knuckle 5.1 mm away, which pushed a held bottle out of the
 /// hand).
-pub(crate) fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
+pub(crate) fn object_colliders(
+    shape: &Shape,
+    origin: &Pose,
+) -> (ColliderBuilder, Option<ColliderBuilder>) {
     let (own, at) = own_shape(shape);
     let aids = match *shape {
         Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
@@ -56,18 +61,19 @@ pub(crate) fn object_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
         Shape::Mesh { .. } => rest_slabs(&own),
         Shape::Box { .. } | Shape::Sphere { .. } => Vec::new(),
     };
+    let alone = ColliderBuilder::new(own.clone()).position(to_sim(&(origin * at)));
     if aids.is_empty() {
-        return ColliderBuilder::new(own).position(to_sim(&(origin * at)));
+        return (alone, None);
     }
     let parts = std::iter::once((to_sim(&at), own))
         .chain(aids.into_iter().map(|a| (SimPose::IDENTITY, a)))
         .collect();
-    ColliderBuilder::new(SharedShape::compound(parts)).position(to_sim(origin))
+    let world = ColliderBuilder::new(SharedShape::compound(parts)).position(to_sim(origin));
+    (world, Some(alone))
 }
 
-/// A collider for a scene object's own shape alone, placed at `origin`: what the robot meets
-/// where [`object_collider`] holds rest aids.
-pub(crate) fn own_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
+/// A collider for a primitive shape alone, placed at `origin`.
+fn own_collider(shape: &Shape, origin: &Pose) -> ColliderBuilder {
     let (own, at) = own_shape(shape);
     ColliderBuilder::new(own).position(to_sim(&(origin * at)))
 }
@@ -196,11 +202,11 @@ pub(crate) fn link_collider(geometry: &Geometry, origin: &Pose) -> ColliderBuild
         Geometry::Capsule { radius, length } => {
             own_collider(&Shape::Capsule { radius, length }, origin)
         }
-        Geometry::Box { size } => object_collider(&Shape::Box { size }, origin),
+        Geometry::Box { size } => own_collider(&Shape::Box { size }, origin),
         Geometry::Cylinder { radius, length } => {
             own_collider(&Shape::Cylinder { radius, length }, origin)
         }
-        Geometry::Sphere { radius } => object_collider(&Shape::Sphere { radius }, origin),
+        Geometry::Sphere { radius } => own_collider(&Shape::Sphere { radius }, origin),
         // The hull's own faces; should rapier refuse them, the capsule that holds the hull.
         Geometry::RoundHull(ref hull) => {
             let points: Vec<Vector> = hull
@@ -232,14 +238,14 @@ mod tests {
 
     #[test]
     fn a_cylinder_object_lies_along_z_and_touches_the_true_cylinder() {
-        let c = object_collider(
+        let (c, _) = object_colliders(
             &Shape::Cylinder {
                 radius: 0.02,
                 length: 0.3,
             },
             &Pose::identity(),
-        )
-        .build();
+        );
+        let c = c.build();
         let aabb = c.compute_aabb();
         assert!((aabb.maxs.z - 0.15).abs() < 1e-6, "{aabb:?}");
         assert!((aabb.maxs.y - 0.02).abs() < 1e-6, "{aabb:?}");

@@ -355,11 +355,9 @@ mod tests {
     use akl_tsr::pose::{pose_from_xyz, pose_from_xyz_rpy};
     use std::f64::consts::PI;
 
-    /// A block of `mass` on a table, the hand closed on it, welded, then lifted 5 cm in 0.5 s:
-    /// the largest load along the pads' faces, the capacity, and the slip at the end.
-    fn lift(mass: f64) -> (f64, f64, f64) {
-        let robot = Robot::panda().unwrap();
-        let world = World {
+    /// A 5 × 5 × 8 cm block of `mass` standing on a table (object 0 the table, 1 the block).
+    fn block_on_table(mass: f64) -> World {
+        World {
             robot_base: Pose::identity(),
             objects: vec![
                 Object {
@@ -383,7 +381,14 @@ mod tests {
                     friction: 0.9,
                 },
             ],
-        };
+        }
+    }
+
+    /// A block of `mass` on a table, the hand closed on it, welded, then lifted 5 cm in 0.5 s:
+    /// the largest load along the pads' faces, the capacity, and the slip at the end.
+    fn lift(mass: f64) -> (f64, f64, f64) {
+        let robot = Robot::panda().unwrap();
+        let world = block_on_table(mass);
         let mut sim = SimWorld::new(&world, &Physics::default());
         let grasp = pose_from_xyz_rpy([0.5, 0.0, 0.055], [PI, 0.0, 0.0]);
         let q0 = robot.ik(&grasp, robot.ready()).unwrap();
@@ -456,31 +461,7 @@ mod tests {
     /// A block resting on a table is pushed hardest by the table, with its weight.
     #[test]
     fn the_strongest_push_on_a_resting_block_is_its_support() {
-        let world = World {
-            robot_base: Pose::identity(),
-            objects: vec![
-                Object {
-                    name: "table".into(),
-                    shape: Shape::Box {
-                        size: [0.6, 0.6, 0.04],
-                    },
-                    pose: pose_from_xyz([0.5, 0.0, -0.02]),
-                    movable: false,
-                    mass: 0.0,
-                    friction: 0.6,
-                },
-                Object {
-                    name: "block".into(),
-                    shape: Shape::Box {
-                        size: [0.05, 0.05, 0.08],
-                    },
-                    pose: pose_from_xyz([0.5, 0.0, 0.04]),
-                    movable: true,
-                    mass: 0.2,
-                    friction: 0.9,
-                },
-            ],
-        };
+        let world = block_on_table(0.2);
         let mut sim = SimWorld::new(&world, &Physics::default());
         for _ in 0..120 {
             sim.step();

@@ -1,7 +1,7 @@
 //! The task's world in rapier3d: furniture as fixed bodies, movable objects as dynamic bodies
 //! with their mass and friction, gravity along −z, a fixed time step.
 
-use crate::convert::{from_sim, object_collider, own_collider, to_sim, vector_from_sim};
+use crate::convert::{from_sim, object_colliders, to_sim, vector_from_sim};
 use crate::exact_depth::ExactShapes;
 use akl_planner::collision::ExactShape;
 use akl_scene::World;
@@ -21,7 +21,7 @@ pub(crate) const OBJECTS: Group = Group::GROUP_2;
 /// simulation (the plan is checked for self-collision, and neighbouring links' models overlap).
 pub(crate) const ARM: Group = Group::GROUP_3;
 /// Collision group of the colliders that show the robot an object's own shape, where the
-/// object's collider holds rest aids besides ([`crate::convert::object_collider`]).
+/// object's collider holds rest aids besides ([`crate::convert::object_colliders`]).
 pub(crate) const OWN_SHAPES: Group = Group::GROUP_4;
 
 /// The collision groups of a robot link's colliders: it meets furniture and objects (their own
@@ -178,11 +178,10 @@ impl SimWorld {
             } else {
                 (FURNITURE, ARM | OBJECTS, ActiveCollisionTypes::default())
             };
-            let collider = object_collider(&o.shape, &Pose::identity());
             // Rest aids are for furniture and objects; the robot meets the object's own shape,
             // in a second, massless collider.
-            let aided = collider.shape.as_compound().is_some();
-            let filter = if aided {
+            let (collider, own) = object_colliders(&o.shape, &Pose::identity());
+            let filter = if own.is_some() {
                 filter.difference(ARM)
             } else {
                 filter
@@ -205,14 +204,10 @@ impl SimWorld {
                 .colliders
                 .insert_with_parent(collider, body, &mut physics.bodies);
             exact.insert(handle, exact_shape.clone(), Pose::identity());
-            if aided {
+            if let Some(own) = own {
                 let robot_groups =
                     InteractionGroups::new(OWN_SHAPES, ARM, InteractionTestMode::And);
-                let own = finish(
-                    own_collider(&o.shape, &Pose::identity()).density(0.0),
-                    robot_groups,
-                    ActiveCollisionTypes::all(),
-                );
+                let own = finish(own.density(0.0), robot_groups, ActiveCollisionTypes::all());
                 let handle = physics
                     .colliders
                     .insert_with_parent(own, body, &mut physics.bodies);

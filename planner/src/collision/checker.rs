@@ -344,12 +344,12 @@ impl<'a> Checker<'a> {
                 }
             }
             let slack = 0.5 * (h.arm_margin + 0.5 * m.self_);
-            let extent = extent - h.margin + h.arm_margin;
+            let arm_extent = h.core + h.arm_margin;
             for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
                 if b.group == Group::Hand {
                     continue;
                 }
-                let reach = extent + b.self_radius;
+                let reach = arm_extent + b.self_radius;
                 let moved = proof.as_ref().map_or(0.0, |pr| {
                     let s = model.tcp_shared[k];
                     pr.moved(held_chain, s) + pr.moved(k, s)
