@@ -1,6 +1,7 @@
 //! A robot: its URDF model (urdf-rs + k), compiled kinematics, limits, gripper, collision
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
+use crate::collision::pair_table::PairTable;
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
 use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
@@ -13,7 +14,7 @@ use crate::urdf_load;
 use akl_tsr::Pose;
 use sha2::{Digest, Sha256};
 use std::path::Path;
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// One embedded mesh of the Panda: its path in `robots/panda` and its bytes.
 macro_rules! panda_mesh {
@@ -140,7 +141,13 @@ pub struct Robot {
     meshes: Arc<[LinkMesh]>,
     /// [`Robot::digest`], computed on first use.
     digest: OnceLock<String>,
+    /// The collision model's distance tables, per self margin (its bits), shared by every
+    /// model built for this robot so that what one plan computes serves the next.
+    pair_tables: Mutex<Vec<(u64, PairTables)>>,
 }
+
+/// The distance tables of a collision model's self pairs, in the model's pair order.
+pub(crate) type PairTables = Arc<[Option<PairTable>]>;
 
 impl Robot {
     /// The built-in Franka Emika Panda (`robots/panda`).
@@ -338,6 +345,7 @@ impl Robot {
             allowed_pairs,
             meshes: geometry.meshes,
             digest: OnceLock::new(),
+            pair_tables: Mutex::new(Vec::new()),
         };
         // A linkage's opening is mapped to its knuckle angle through the pads' gap.
         if let Some(map) = crate::hand::linkage_width_map(&robot) {
@@ -357,6 +365,23 @@ impl Robot {
     /// gives only primitives).
     pub fn meshes(&self) -> &[LinkMesh] {
         &self.meshes
+    }
+
+    /// The distance tables of the collision model with self margin `self_margin`: the ones
+    /// built earlier for this robot, else those `build` makes (kept for the next model).
+    pub(crate) fn pair_tables(
+        &self,
+        self_margin: f64,
+        build: impl FnOnce() -> PairTables,
+    ) -> PairTables {
+        let mut cache = self.pair_tables.lock().unwrap_or_else(|e| e.into_inner());
+        let key = self_margin.to_bits();
+        if let Some((_, tables)) = cache.iter().find(|(k, _)| *k == key) {
+            return tables.clone();
+        }
+        let tables = build();
+        cache.push((key, tables.clone()));
+        tables
     }
 
     /// SHA-256 (hex) of everything the robot is built from: `robot.toml`, the URDF and every

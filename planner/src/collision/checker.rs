@@ -224,6 +224,9 @@ impl<'a> Checker<'a> {
                 continue;
             };
             let (ba, bb) = (&bodies[i], &bodies[j]);
+            let tabled = model.tables[p]
+                .as_ref()
+                .map_or(f64::MIN, |t| t.lower_bound(self.robot, ba, bb, q));
             let reach = ba.self_radius + bb.self_radius;
             let balls = reach + ba.half_segment + bb.half_segment;
             let centres = 0.5 * ((pa.a + pa.b) - (pb.a + pb.b));
@@ -233,8 +236,11 @@ impl<'a> Checker<'a> {
             });
             let centres_sq = centres.norm_squared();
             if let Some(pr) = proof.as_mut() {
-                // The distance of the bounding balls first, the segments' only if it matters,
-                // then the balls that hold the two elements.
+                // The table first, then the distance of the bounding balls, the segments'
+                // only if it matters, then the balls that hold the two elements.
+                if tabled > 0.0 && pr.settled(moved, self_slack + tabled) {
+                    continue;
+                }
                 let balls_gap = centres_sq.sqrt() - balls;
                 if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
                     continue;
@@ -243,12 +249,13 @@ impl<'a> Checker<'a> {
                 if gap > 0.0 && pr.settled(moved, self_slack + gap) {
                     continue;
                 }
-                let gap = gap.max(self_gap(ba, pa, bb, pb));
+                let gap = gap.max(self_gap(ba, pa, bb, pb)).max(tabled);
                 if gap > 0.0 {
                     pr.limit(moved, self_slack + gap);
                     continue;
                 }
-            } else if centres_sq > balls * balls
+            } else if tabled > 0.0
+                || centres_sq > balls * balls
                 || segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b) > reach * reach
                 || self_gap(ba, pa, bb, pb) > 0.0
             {

@@ -29,6 +29,7 @@ mod exact;
 mod held;
 mod hit;
 mod model;
+pub(crate) mod pair_table;
 mod report;
 mod scene;
 mod spheres;

@@ -1,13 +1,14 @@
 //! The robot's collision model: its bodies (collision elements grown by their margins),
 //! the joints that move each, and which pairs are checked against each other.
 
+use super::pair_table::PairTable;
 use super::spheres::Spheres;
 use crate::contact_rules::LinkRole;
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::hand::HandModel;
 use crate::parry_convert;
-use crate::robot::Robot;
+use crate::robot::{PairTables, Robot};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d_f64::shape::SharedShape;
@@ -76,6 +77,8 @@ pub struct RobotCollision {
     pub(super) offsets: Vec<usize>,
     /// For each self pair, how many leading joints of their chains the two bodies share.
     pub(super) self_shared: Vec<usize>,
+    /// For each self pair, its distance table if one or two joints move the two apart.
+    pub(super) tables: PairTables,
     /// For each body, how many leading joints its chain shares with the TCP's.
     pub(super) tcp_shared: Vec<usize>,
     /// The links turned by arm-driven revolute joints, with their axes in the link frame.
@@ -240,6 +243,12 @@ impl RobotCollision {
             .collect();
         turned.sort_by_key(|(link, _)| *link);
         turned.dedup_by_key(|(link, _)| *link);
+        let tables = robot.pair_tables(margins.self_, || {
+            self_pairs
+                .iter()
+                .map(|&(i, j)| PairTable::for_pair(robot, &bodies[i], &bodies[j]))
+                .collect()
+        });
         RobotCollision {
             bodies,
             self_pairs,
@@ -249,6 +258,7 @@ impl RobotCollision {
             chains,
             offsets,
             self_shared,
+            tables,
             tcp_shared,
             turned,
         }

@@ -1,0 +1,352 @@
+//! Tabulated distances for link pairs that only one or two arm joints move against each other.
+//!
+//! Near the wrist the balls that cull exact tests always overlap: of 1,000 random Panda
+//! configurations, link 5 against the hand reaches parry's GJK in 898 and link 5 against
+//! link 7 in 954, more than every other pair together. Yet their relative pose depends on
+//! joints 6 and 7 only. A [`PairTable`] holds, at each node of a grid over those joints, a
+//! lower bound on the distance between the two elements (each grown by half the self margin),
+//! computed the first time a check needs that node. At any configuration the distance is at
+//! least the nearest node's value less how far the joint offsets can move a point of the
+//! moving element (`reach`·|Δ| per joint), so a positive bound settles the pair without
+//! parry, and in an edge proof credits that clearance. A node's value depends on the node
+//! alone (it is computed at the robot's ready configuration with the table's joints set), so
+//! what a check concludes never depends on which checks ran before it.
+
+use super::cull::placed;
+use super::model::Body;
+use crate::fk::{Drive, Kinematics, Motion};
+use crate::parry_convert;
+use crate::robot::Robot;
+use akl_tsr::nalgebra::Vector3;
+use smallvec::SmallVec;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Largest amount (metres) one table joint's offset from the nearest node may lower the bound:
+/// each joint's grid step is `2·CELL_SLACK / reach`. Chosen by measurement (BENCHMARKS.md,
+/// "Wrist tables").
+const CELL_SLACK: f64 = 0.002;
+
+/// Most nodes in one table (4 bytes each); coarser steps beyond it.
+const MAX_NODES: usize = 1 << 18;
+
+/// The stored pattern of a node not computed yet (a NaN, which no distance is).
+const UNKNOWN: u32 = u32::MAX;
+
+/// What parry's distances are trusted to (metres), as in the checker.
+const DISTANCE_TOLERANCE: f64 = 1e-5;
+
+/// One joint a table runs over.
+#[derive(Debug, Clone, Copy)]
+struct TableJoint {
+    /// Index in the arm configuration.
+    index: usize,
+    /// The grid's first node and its spacing, in arm-joint values.
+    lo: f64,
+    step: f64,
+    count: usize,
+    /// How far (metres) a point of the moving element can move per unit of the arm value.
+    reach: f64,
+}
+
+/// Lower bounds on the distance between the two elements of one self-collision pair, over a
+/// grid of the one or two arm joints that move them against each other.
+pub(crate) struct PairTable {
+    joints: SmallVec<[TableJoint; 2]>,
+    cells: Box<[AtomicU32]>,
+}
+
+impl std::fmt::Debug for PairTable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PairTable")
+            .field("joints", &self.joints)
+            .field("nodes", &self.cells.len())
+            .finish()
+    }
+}
+
+/// An arm-driven revolute joint on the way from one element to the other.
+struct PathJoint {
+    /// The link it turns.
+    link: usize,
+    /// Its arm joint and the multiplier of that joint's value.
+    index: usize,
+    scale: f64,
+    /// Its axis in the link frame.
+    axis: Vector3<f64>,
+}
+
+/// The arm-driven revolute joints between `link` and its ancestor `above` (excluded), nearest
+/// the base first; `None` if anything else moves on the way (a gripper or prismatic joint).
+fn revolutes_between(kin: &Kinematics, link: usize, above: usize) -> Option<Vec<PathJoint>> {
+    let links = kin.links();
+    let mut found = Vec::new();
+    let mut at = link;
+    while at != above {
+        match links[at].motion {
+            Motion::Fixed
+            | Motion::Revolute {
+                drive: Drive::Constant(_),
+                ..
+            }
+            | Motion::Prismatic {
+                drive: Drive::Constant(_),
+                ..
+            } => {}
+            Motion::Revolute {
+                axis,
+                drive: Drive::Arm { index, scale, .. },
+            } => found.push(PathJoint {
+                link: at,
+                index,
+                scale,
+                axis: axis.into_inner(),
+            }),
+            _ => return None,
+        }
+        at = links[at].parent?;
+    }
+    found.reverse();
+    Some(found)
+}
+
+/// The nearest common ancestor of two links.
+fn common_ancestor(kin: &Kinematics, a: usize, b: usize) -> Option<usize> {
+    let links = kin.links();
+    let mut above_a = vec![a];
+    while let Some(p) = links[*above_a.last()?].parent {
+        above_a.push(p);
+    }
+    let mut at = b;
+    loop {
+        if above_a.contains(&at) {
+            return Some(at);
+        }
+        at = links[at].parent?;
+    }
+}
+
+/// Distance from `p` to the line through `origin` along the unit vector `axis`.
+fn to_axis(p: &Vector3<f64>, origin: &Vector3<f64>, axis: &Vector3<f64>) -> f64 {
+    (p - origin).cross(axis).norm()
+}
+
+impl PairTable {
+    /// A table for elements `a` and `b` of `robot`, if one or two arm joints, each used once,
+    /// are all that move one against the other (and nothing moves the other side).
+    pub(super) fn for_pair(robot: &Robot, a: &Body, b: &Body) -> Option<PairTable> {
+        let kin = robot.kinematics();
+        let top = common_ancestor(kin, a.link, b.link)?;
+        let (on_a, on_b) = (
+            revolutes_between(kin, a.link, top)?,
+            revolutes_between(kin, b.link, top)?,
+        );
+        let (moving, path) = match (on_a.is_empty(), on_b.is_empty()) {
+            (true, false) => (b, on_b),
+            (false, true) => (a, on_a),
+            _ => return None,
+        };
+        if path.len() > 2 || (path.len() == 2 && path[0].index == path[1].index) {
+            return None;
+        }
+        // Reaches from the ready configuration: the moving element's ball and every axis on
+        // the path keep their places relative to the joints beyond them.
+        let poses = kin.link_poses(robot.ready(), robot.open_width());
+        let at = placed(moving, &poses[moving.link]);
+        let centre = 0.5 * (at.a + at.b);
+        let radius = moving.half_segment + moving.self_radius;
+        let axis_of = |j: &PathJoint| {
+            (
+                poses[j.link].translation.vector,
+                poses[j.link].rotation * j.axis,
+            )
+        };
+        let last = axis_of(&path[path.len() - 1]);
+        let mut reaches = vec![0.0; path.len()];
+        reaches[path.len() - 1] = to_axis(&centre, &last.0, &last.1) + radius;
+        if path.len() == 2 {
+            let first = axis_of(&path[0]);
+            reaches[0] = to_axis(&last.0, &first.0, &first.1) + (centre - last.0).norm() + radius;
+        }
+        let limits = robot.joint_limits();
+        let mut joints: SmallVec<[TableJoint; 2]> = path
+            .iter()
+            .zip(&reaches)
+            .map(|(p, &reach)| {
+                let [lo, hi] = limits[p.index];
+                let reach = reach * p.scale.abs();
+                let count = (((hi - lo) * reach / (2.0 * CELL_SLACK)).ceil() as usize).max(1) + 1;
+                TableJoint {
+                    index: p.index,
+                    lo,
+                    step: (hi - lo) / (count - 1) as f64,
+                    count,
+                    reach,
+                }
+            })
+            .collect();
+        while joints.iter().map(|j| j.count).product::<usize>() > MAX_NODES {
+            for j in &mut joints {
+                let span = j.step * (j.count - 1) as f64;
+                j.count = j.count.div_ceil(2).max(2);
+                j.step = span / (j.count - 1) as f64;
+            }
+        }
+        let nodes = joints.iter().map(|j| j.count).product();
+        Some(PairTable {
+            joints,
+            cells: (0..nodes).map(|_| AtomicU32::new(UNKNOWN)).collect(),
+        })
+    }
+
+    /// A lower bound on the distance between `a` and `b` (each grown by half the self margin)
+    /// at arm configuration `q`; 0 or less when the table cannot tell them apart.
+    pub(super) fn lower_bound(&self, robot: &Robot, a: &Body, b: &Body, q: &[f64]) -> f64 {
+        let mut cell = 0;
+        let mut slack = 0.0;
+        let mut node = [0.0; 2];
+        for (k, j) in self.joints.iter().enumerate() {
+            let v = q[j.index];
+            let i = ((v - j.lo) / j.step)
+                .round()
+                .clamp(0.0, (j.count - 1) as f64) as usize;
+            node[k] = j.lo + i as f64 * j.step;
+            slack += j.reach * (v - node[k]).abs();
+            cell = cell * j.count + i;
+        }
+        let bits = self.cells[cell].load(Ordering::Relaxed);
+        let distance = if bits == UNKNOWN {
+            let d = self.node_distance(robot, a, b, &node[..self.joints.len()]);
+            self.cells[cell].store(d.to_bits(), Ordering::Relaxed);
+            d
+        } else {
+            f32::from_bits(bits)
+        };
+        f64::from(distance) - slack - DISTANCE_TOLERANCE
+    }
+
+    /// The distance at a node, rounded down to single precision: the arm at its ready
+    /// configuration with the table's joints at `values`.
+    fn node_distance(&self, robot: &Robot, a: &Body, b: &Body, values: &[f64]) -> f32 {
+        let mut q = robot.ready().to_vec();
+        for (j, v) in self.joints.iter().zip(values) {
+            q[j.index] = *v;
+        }
+        let poses = robot.kinematics().link_poses(&q, robot.open_width());
+        let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
+        let d = parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
+            .unwrap_or(0.0)
+            .max(0.0);
+        let rounded = d as f32;
+        if f64::from(rounded) > d {
+            rounded.next_down()
+        } else {
+            rounded
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::RobotCollision;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random_q(robot: &Robot, rng: &mut ChaCha8Rng) -> Vec<f64> {
+        robot
+            .joint_limits()
+            .iter()
+            .map(|[lo, hi]| rng.gen_range(*lo..*hi))
+            .collect()
+    }
+
+    /// The tabled pairs of the built-in Panda, as (table, element, element, names).
+    fn tabled(model: &RobotCollision) -> Vec<(&PairTable, &Body, &Body)> {
+        model
+            .self_pairs
+            .iter()
+            .zip(model.tables.iter())
+            .filter_map(|(&(i, j), t)| Some((t.as_ref()?, &model.bodies[i], &model.bodies[j])))
+            .collect()
+    }
+
+    #[test]
+    fn the_panda_tables_its_wrist_pairs_over_joints_6_and_7_only() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let links = robot.links();
+        let mut names: Vec<String> = tabled(&model)
+            .iter()
+            .map(|(t, a, b)| {
+                let joints: Vec<usize> = t.joints.iter().map(|j| j.index).collect();
+                assert_eq!(joints, [5, 6]);
+                format!("{}|{}", links[a.link].name, links[b.link].name)
+            })
+            .collect();
+        names.dedup();
+        assert_eq!(names, ["fer_link5|fer_link7", "fer_link5|fer_hand"]);
+        // Pairs with a finger move with the gripper too: no table.
+        for (&(i, j), t) in model.self_pairs.iter().zip(model.tables.iter()) {
+            let pair = [
+                &links[model.bodies[i].link].name,
+                &links[model.bodies[j].link].name,
+            ];
+            if pair.iter().any(|n| n.contains("finger")) {
+                assert!(t.is_none(), "{pair:?}");
+            }
+        }
+    }
+
+    /// The bound never exceeds parry's distance, anywhere in a cell (random configurations,
+    /// and the corners of cells where the offset from the node is largest), and settles most
+    /// free configurations of the forearm against link 7 and the hand.
+    #[test]
+    fn the_bound_is_below_the_distance_and_settles_most_free_wrists() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        for (t, a, b) in tabled(&model) {
+            let (mut free, mut settled) = (0, 0);
+            for k in 0..3000 {
+                let mut q = random_q(&robot, &mut rng);
+                if k % 2 == 1 {
+                    for j in &t.joints {
+                        let i = ((q[j.index] - j.lo) / j.step).floor();
+                        q[j.index] = j.lo + (i + 0.5) * j.step * (1.0 - 1e-12);
+                    }
+                }
+                let bound = t.lower_bound(&robot, a, b, &q);
+                let poses = robot.kinematics().link_poses(&q, robot.open_width());
+                let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
+                let d = parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
+                    .unwrap();
+                assert!(bound <= d, "bound {bound} above the distance {d} at {q:?}");
+                if d > 0.0 {
+                    free += 1;
+                    settled += usize::from(bound > 0.0);
+                }
+            }
+            assert!(settled * 10 >= free * 8, "{settled} of {free} free settled");
+        }
+    }
+
+    /// A node's value is the same whichever configuration first asked for it.
+    #[test]
+    fn a_node_does_not_depend_on_who_filled_it() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let (t, a, b) = tabled(&model)[0];
+        let fresh = PairTable::for_pair(&robot, a, b).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let q = random_q(&robot, &mut rng);
+        let mut other = random_q(&robot, &mut rng);
+        for j in &t.joints {
+            other[j.index] = q[j.index];
+        }
+        let first = t.lower_bound(&robot, a, b, &other);
+        assert_eq!(fresh.lower_bound(&robot, a, b, &q).to_bits(), {
+            t.lower_bound(&robot, a, b, &q).to_bits()
+        });
+        assert_eq!(first.to_bits(), t.lower_bound(&robot, a, b, &q).to_bits());
+    }
+}
