@@ -175,6 +175,21 @@ pub(crate) fn distance_up_to(
     )
 }
 
+/// A point where two overlapping shapes overlap: the middle of parry's deepest contact points
+/// (world frame); `None` when they do not overlap or parry cannot tell. Not certified: whoever
+/// relies on it measures how deep it lies in each shape.
+pub(crate) fn overlap_point(
+    a: &SharedShape,
+    pa: &Pose,
+    b: &SharedShape,
+    pb: &Pose,
+) -> Option<Vector3<f64>> {
+    let c =
+        parry3d_f64::query::contact(&pose(pa), a.as_ref(), &pose(pb), b.as_ref(), 0.0).ok()??;
+    let mid = 0.5 * (c.point1 + c.point2);
+    Some(Vector3::new(mid.x, mid.y, mid.z))
+}
+
 /// How deep two parry shapes at the given (f64) poses interpenetrate (metres; 0 when apart or
 /// touching); `None` if parry has no contact query for the pair.
 pub(crate) fn penetration(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> Option<f64> {

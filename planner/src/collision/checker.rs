@@ -5,6 +5,7 @@ use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed}
 use super::held::Held;
 use super::hit::Hit;
 use super::model::{Body, Group, RobotCollision};
+use super::pair_table::Tabled;
 use super::scene::{Obstacle, Scene};
 use super::spheres::{gap_between, Placement};
 use super::sweep::{Proof, Sweep};
@@ -234,9 +235,18 @@ impl<'a> Checker<'a> {
                 continue;
             };
             let (ba, bb) = (&bodies[i], &bodies[j]);
-            let tabled = model.tables[p]
-                .as_ref()
-                .map_or(f64::MIN, |t| t.lower_bound(self.robot, ba, bb, q));
+            let tabled = match model.tables[p].as_ref() {
+                None => f64::MIN,
+                Some(t) => match t.lookup(self.robot, ba, bb, q) {
+                    Tabled::Apart(gap) => gap,
+                    Tabled::Overlapping => {
+                        return Err(Hit::SelfCollision(
+                            links[ba.link].name.clone(),
+                            links[bb.link].name.clone(),
+                        ))
+                    }
+                },
+            };
             let reach = ba.self_radius + bb.self_radius;
             let balls = reach + ba.half_segment + bb.half_segment;
             let centres = 0.5 * ((pa.a + pa.b) - (pb.a + pb.b));
@@ -292,11 +302,12 @@ impl<'a> Checker<'a> {
             let bounds = bounding_box(p, b.world_radius);
             let role = model.role(b);
             let mut place: Option<Placement> = None;
-            for (index, o) in self.scene.obstacles.iter().enumerate() {
-                let gap_sq = box_gap_sq(&bounds, &o.target.min, &o.target.max);
+            for (index, [min, max]) in self.scene.boxes.iter().enumerate() {
+                let gap_sq = box_gap_sq(&bounds, min, max);
                 if gap_sq > 0.0 && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
                     continue;
                 }
+                let o = &self.scene.obstacles[index];
                 if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;
                 }

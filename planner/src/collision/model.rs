@@ -32,6 +32,8 @@ pub(crate) enum Group {
 pub(super) struct Body {
     pub(super) link: usize,
     pub(super) group: Group,
+    /// The element as the URDF (or the hand model) gives it, before any margin.
+    pub(super) geometry: Geometry,
     /// Pose of the parry shape in the link frame.
     pub(super) local: Pose,
     /// Grown by the group's margin, for tests against the world and a held object.
@@ -190,6 +192,7 @@ impl RobotCollision {
             bodies.push(Body {
                 link: i,
                 group,
+                geometry: geometry.clone(),
                 local: origin * fix,
                 world_shape,
                 self_shape,

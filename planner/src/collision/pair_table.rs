@@ -15,6 +15,7 @@
 use super::cull::placed;
 use super::model::Body;
 use crate::fk::{Drive, Kinematics, Motion};
+use crate::geometry::Geometry;
 use crate::parry_convert;
 use crate::robot::Robot;
 use akl_tsr::nalgebra::Vector3;
@@ -198,11 +199,11 @@ impl PairTable {
         })
     }
 
-    /// A lower bound on the distance between `a` and `b` (each grown by half the self margin)
-    /// at arm configuration `q`; 0 or less when the table cannot tell them apart.
-    pub(super) fn lower_bound(&self, robot: &Robot, a: &Body, b: &Body, q: &[f64]) -> f64 {
+    /// What the table knows of `a` and `b` (each grown by half the self margin) at arm
+    /// configuration `q`.
+    pub(super) fn lookup(&self, robot: &Robot, a: &Body, b: &Body, q: &[f64]) -> Tabled {
         let mut cell = 0;
-        let mut slack = 0.0;
+        let mut slack = DISTANCE_TOLERANCE;
         let mut node = [0.0; 2];
         for (k, j) in self.joints.iter().enumerate() {
             let v = q[j.index];
@@ -214,19 +215,25 @@ impl PairTable {
             cell = cell * j.count + i;
         }
         let bits = self.cells[cell].load(Ordering::Relaxed);
-        let distance = if bits == UNKNOWN {
-            let d = self.node_distance(robot, a, b, &node[..self.joints.len()]);
-            self.cells[cell].store(d.to_bits(), Ordering::Relaxed);
-            d
+        let value = if bits == UNKNOWN {
+            let v = self.node_value(robot, a, b, &node[..self.joints.len()]);
+            self.cells[cell].store(v.to_bits(), Ordering::Relaxed);
+            v
         } else {
             f32::from_bits(bits)
         };
-        f64::from(distance) - slack - DISTANCE_TOLERANCE
+        let value = f64::from(value);
+        if value < 0.0 && -value > slack {
+            Tabled::Overlapping
+        } else {
+            Tabled::Apart(value - slack)
+        }
     }
 
-    /// The distance at a node, rounded down to single precision: the arm at its ready
-    /// configuration with the table's joints at `values`.
-    fn node_distance(&self, robot: &Robot, a: &Body, b: &Body, values: &[f64]) -> f32 {
+    /// The value of a node, with the arm at its ready configuration and the table's joints at
+    /// `values`: the distance (a lower bound), or where the two overlap, minus how deep a point
+    /// lies in both (a lower bound too); rounded towards zero to single precision.
+    fn node_value(&self, robot: &Robot, a: &Body, b: &Body, values: &[f64]) -> f32 {
         let mut q = robot.ready().to_vec();
         for (j, v) in self.joints.iter().zip(values) {
             q[j.index] = *v;
@@ -234,15 +241,91 @@ impl PairTable {
         let poses = robot.kinematics().link_poses(&q, robot.open_width());
         let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
         let d = parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
-            .unwrap_or(0.0)
-            .max(0.0);
-        let rounded = d as f32;
-        if f64::from(rounded) > d {
-            rounded.next_down()
+            .unwrap_or(0.0);
+        let value = if d > 0.0 {
+            d
         } else {
-            rounded
-        }
+            parry_convert::overlap_point(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
+                .and_then(|w| {
+                    let grow = 0.5 * robot.config().collision.self_margin;
+                    let depth =
+                        depth_in(a, &pa.pose, grow, &w)?.min(depth_in(b, &pb.pose, grow, &w)?);
+                    (depth > 0.0).then_some(-depth)
+                })
+                .unwrap_or(0.0)
+        };
+        toward_zero(value)
     }
+}
+
+/// What a table tells of a pair at a configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Tabled {
+    /// A lower bound on the distance (nothing known when it is 0 or less).
+    Apart(f64),
+    /// A point lies inside both elements: they collide.
+    Overlapping,
+}
+
+/// `v` in single precision, rounded towards zero.
+fn toward_zero(v: f64) -> f32 {
+    let r = v as f32;
+    if f64::from(r).abs() > v.abs() {
+        if r > 0.0 {
+            r.next_down()
+        } else {
+            r.next_up()
+        }
+    } else {
+        r
+    }
+}
+
+/// A lower bound on how deep the world point `w` lies in element `body` at `pose`, grown by
+/// `grow` (negative: outside, or not known to be inside); `None` for shapes without one here
+/// (cylinders). Exact inside a hull's faces (the nearest face plane) and for boxes, capsules
+/// and spheres; outside a hull's faces, the rounding less the distance to the nearest vertex.
+fn depth_in(body: &Body, pose: &akl_tsr::Pose, grow: f64, w: &Vector3<f64>) -> Option<f64> {
+    let p = pose.inverse_transform_point(&(*w).into()).coords;
+    Some(match &body.geometry {
+        Geometry::RoundHull(hull) => {
+            let r = hull.border + grow;
+            let mut inside = f64::INFINITY;
+            for t in &hull.triangles {
+                let [x, y, z] = t.map(|i| hull.vertices[i as usize].coords);
+                let n = (y - x).cross(&(z - x));
+                let norm = n.norm();
+                if norm > 0.0 {
+                    inside = inside.min(-(p - x).dot(&n) / norm);
+                }
+            }
+            if inside >= 0.0 {
+                r + inside
+            } else {
+                let nearest = hull
+                    .vertices
+                    .iter()
+                    .map(|v| (p - v.coords).norm())
+                    .fold(f64::INFINITY, f64::min);
+                r - nearest
+            }
+        }
+        Geometry::Box { size } => {
+            let e = Vector3::new(0.5 * size[0], 0.5 * size[1], 0.5 * size[2]);
+            let beyond = p.abs() - e;
+            if beyond.max() <= 0.0 {
+                grow - beyond.max()
+            } else {
+                grow - beyond.sup(&Vector3::zeros()).norm()
+            }
+        }
+        Geometry::Capsule { radius, length } => {
+            let z = p.z.clamp(-0.5 * length, 0.5 * length);
+            radius + grow - (p - Vector3::new(0.0, 0.0, z)).norm()
+        }
+        Geometry::Sphere { radius } => radius + grow - p.norm(),
+        Geometry::Cylinder { .. } => return None,
+    })
 }
 
 #[cfg(test)]
@@ -298,15 +381,16 @@ mod tests {
     }
 
     /// The bound never exceeds parry's distance, anywhere in a cell (random configurations,
-    /// and the corners of cells where the offset from the node is largest), and settles most
-    /// free configurations of the forearm against link 7 and the hand.
+    /// and the middles between nodes, where the offset is largest), a pair it calls
+    /// overlapping does overlap, and it settles most configurations of the forearm against
+    /// link 7 and the hand either way.
     #[test]
-    fn the_bound_is_below_the_distance_and_settles_most_free_wrists() {
+    fn the_table_is_never_wrong_and_settles_most_wrists() {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
         let mut rng = ChaCha8Rng::seed_from_u64(21);
         for (t, a, b) in tabled(&model) {
-            let (mut free, mut settled) = (0, 0);
+            let (mut free, mut apart, mut hit, mut overlapping) = (0, 0, 0, 0);
             for k in 0..3000 {
                 let mut q = random_q(&robot, &mut rng);
                 if k % 2 == 1 {
@@ -315,18 +399,65 @@ mod tests {
                         q[j.index] = j.lo + (i + 0.5) * j.step * (1.0 - 1e-12);
                     }
                 }
-                let bound = t.lower_bound(&robot, a, b, &q);
                 let poses = robot.kinematics().link_poses(&q, robot.open_width());
                 let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
                 let d = parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
                     .unwrap();
-                assert!(bound <= d, "bound {bound} above the distance {d} at {q:?}");
-                if d > 0.0 {
+                let meet =
+                    parry_convert::intersects(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose);
+                match t.lookup(&robot, a, b, &q) {
+                    Tabled::Apart(bound) => {
+                        assert!(bound <= d, "bound {bound} above the distance {d} at {q:?}");
+                        apart += usize::from(bound > 0.0);
+                    }
+                    Tabled::Overlapping => {
+                        assert!(meet, "called overlapping, parry finds {d} m apart at {q:?}");
+                        overlapping += 1;
+                    }
+                }
+                if meet {
+                    hit += 1;
+                } else {
                     free += 1;
-                    settled += usize::from(bound > 0.0);
                 }
             }
-            assert!(settled * 10 >= free * 8, "{settled} of {free} free settled");
+            assert!(apart * 10 >= free * 8, "{apart} of {free} free settled");
+            assert!(
+                overlapping * 10 >= hit * 3,
+                "{overlapping} of {hit} collisions settled"
+            );
+        }
+    }
+
+    /// Depths of points in a hull and a box: exact inside, a lower bound outside a hull's
+    /// faces, and negative outside the grown shape.
+    #[test]
+    fn depths_of_points_bound_the_true_depth() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let pose = akl_tsr::Pose::identity();
+        for body in &model.bodies {
+            for _ in 0..300 {
+                let w = Vector3::new(
+                    rng.gen_range(-0.15..0.15),
+                    rng.gen_range(-0.15..0.15),
+                    rng.gen_range(-0.15..0.15),
+                );
+                let Some(depth) = depth_in(body, &pose, 0.005, &w) else {
+                    continue;
+                };
+                let (shape, _) = parry_convert::robot_shape(&body.geometry, 0.005);
+                let ball = parry3d_f64::shape::SharedShape::ball(1e-9);
+                let at = akl_tsr::pose::pose_from_xyz([w.x, w.y, w.z]);
+                let inside = parry_convert::intersects(&shape, &pose, &ball, &at);
+                if depth > 1e-9 {
+                    assert!(inside, "{w:?} called {depth} deep, parry finds it outside");
+                }
+                if !inside {
+                    assert!(depth <= 1e-9, "{w:?} outside, called {depth} deep");
+                }
+            }
         }
     }
 
@@ -338,15 +469,15 @@ mod tests {
         let (t, a, b) = tabled(&model)[0];
         let fresh = PairTable::for_pair(&robot, a, b).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let q = random_q(&robot, &mut rng);
-        let mut other = random_q(&robot, &mut rng);
-        for j in &t.joints {
-            other[j.index] = q[j.index];
+        for _ in 0..50 {
+            let q = random_q(&robot, &mut rng);
+            let mut other = random_q(&robot, &mut rng);
+            for j in &t.joints {
+                other[j.index] = q[j.index];
+            }
+            let first = t.lookup(&robot, a, b, &other);
+            assert_eq!(first, t.lookup(&robot, a, b, &q));
+            assert_eq!(fresh.lookup(&robot, a, b, &q), first);
         }
-        let first = t.lower_bound(&robot, a, b, &other);
-        assert_eq!(fresh.lower_bound(&robot, a, b, &q).to_bits(), {
-            t.lower_bound(&robot, a, b, &q).to_bits()
-        });
-        assert_eq!(first.to_bits(), t.lower_bound(&robot, a, b, &q).to_bits());
     }
 }
