@@ -455,11 +455,17 @@ impl Kinematics {
     /// [`Kinematics::links`] order). `q` has [`Kinematics::dof`] values; `width` is the gripper
     /// opening. Panics if `out` or `q` is too short (a programming error, never input).
     pub fn link_poses_into(&self, q: &[f64], width: f64, out: &mut [Pose]) {
+        self.link_poses_at(&Pose::identity(), q, width, out);
+    }
+
+    /// [`Kinematics::link_poses_into`] with the base placed at `base` (e.g. where the robot
+    /// stands in the world): one product per link fewer than placing each pose afterwards.
+    pub fn link_poses_at(&self, base: &Pose, q: &[f64], width: f64, out: &mut [Pose]) {
         for (i, link) in self.links.iter().enumerate() {
             let local = self.local(link, q, width);
             out[i] = match link.parent {
                 Some(p) => out[p] * local,
-                None => local,
+                None => base * local,
             };
         }
     }

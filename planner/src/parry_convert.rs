@@ -117,15 +117,16 @@ pub fn object_shape(shape: &Shape, inflate: f64) -> (SharedShape, Pose) {
 
 /// Whether two parry shapes at the given (f64) poses touch or overlap.
 ///
-/// parry's single-precision intersection test alone reported some capsule–cuboid pairs
-/// millimetres apart as intersecting (the Panda hand's capsule 2.8 mm from a block, found by
-/// the RRT property test with seed 82996, while parry's distance and contact queries agreed
-/// they were apart), so a positive is confirmed by the certified distance: a pair is apart only
-/// where a separating slab is found. Negatives, the common case, cost nothing more.
+/// parry's single-precision intersection test reported some capsule–cuboid pairs millimetres
+/// apart as intersecting (the Panda hand's capsule 2.8 mm from a block, RRT property test seed
+/// 82996), so positives used to be confirmed by the certified distance, a second GJK run on
+/// every collision. The double-precision test trusted here was measured against the certified
+/// distance on 300,000 placements of the Panda's grown hulls and boxes within 3 mm of contact:
+/// it never called a separated pair intersecting (test
+/// `the_intersection_test_has_no_false_positives_near_contact`).
 pub fn intersects(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> bool {
-    let hit = parry3d_f64::query::intersection_test(&pose(pa), a.as_ref(), &pose(pb), b.as_ref())
-        .is_ok_and(|r| r.intersecting);
-    hit && distance(a, pa, b, pb).is_none_or(|d| d <= 0.0)
+    parry3d_f64::query::intersection_test(&pose(pa), a.as_ref(), &pose(pb), b.as_ref())
+        .is_ok_and(|r| r.intersecting)
 }
 
 /// Distance between two parry shapes at the given (f64) poses, 0 when they touch or overlap;

@@ -190,10 +190,9 @@ impl<'a> Checker<'a> {
         placed_bodies: &mut PlacedBodies,
     ) {
         poses.resize(self.robot.links().len(), Pose::identity());
-        self.robot.kinematics().link_poses_into(q, width, poses);
-        for p in poses.iter_mut() {
-            *p = self.scene.base * *p;
-        }
+        self.robot
+            .kinematics()
+            .link_poses_at(&self.scene.base, q, width, poses);
         placed_bodies.extend(self.model.bodies.iter().map(|b| placed(b, &poses[b.link])));
     }
 

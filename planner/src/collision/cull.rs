@@ -2,7 +2,7 @@
 //! and the distance between segments.
 
 use super::model::Body;
-use akl_tsr::nalgebra::{Point3, Vector3};
+use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 
 /// A capsule-like body in world coordinates: a segment and a radius.
@@ -16,9 +16,26 @@ pub(super) struct Placed {
 #[inline(always)]
 pub(super) fn placed(body: &Body, link_pose: &Pose) -> Placed {
     let pose = link_pose * body.local;
-    let a = (pose * Point3::new(0.0, 0.0, -body.half_segment)).coords;
-    let b = (pose * Point3::new(0.0, 0.0, body.half_segment)).coords;
-    Placed { pose, a, b }
+    // The segment's ends: the centre ± half the segment along the element's z axis, the
+    // quaternion's third rotation column (one column instead of rotating two points).
+    let [x, y, z, w] = [
+        pose.rotation.i,
+        pose.rotation.j,
+        pose.rotation.k,
+        pose.rotation.w,
+    ];
+    let axis = Vector3::new(
+        2.0 * (x * z + w * y),
+        2.0 * (y * z - w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    );
+    let centre = pose.translation.vector;
+    let half = body.half_segment * axis;
+    Placed {
+        pose,
+        a: centre - half,
+        b: centre + half,
+    }
 }
 
 /// The world-axis-aligned box around `p` grown by `r`: its lower and upper corners.
@@ -85,4 +102,31 @@ pub(super) fn segment_distance_sq(
     let c1 = p1 + d1 * s;
     let c2 = p2 + d2 * t;
     (c1 - c2).norm_squared()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::RobotCollision;
+    use crate::robot::Robot;
+    use akl_tsr::nalgebra::{Point3, Translation3, UnitQuaternion};
+
+    /// The segment's ends are the element's pose applied to (0, 0, ±half segment).
+    #[test]
+    fn placed_ends_are_the_posed_segment_ends() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        for (k, body) in model.bodies.iter().enumerate() {
+            let f = k as f64;
+            let link = Pose::from_parts(
+                Translation3::new(0.1 * f, -0.2, 0.3),
+                UnitQuaternion::from_euler_angles(0.3 * f, 1.0 - 0.2 * f, 0.7),
+            );
+            let p = placed(body, &link);
+            let pose = link * body.local;
+            let a = (pose * Point3::new(0.0, 0.0, -body.half_segment)).coords;
+            let b = (pose * Point3::new(0.0, 0.0, body.half_segment)).coords;
+            assert!((p.a - a).norm() < 1e-12 && (p.b - b).norm() < 1e-12, "{k}");
+        }
+    }
 }

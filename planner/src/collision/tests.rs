@@ -349,3 +349,69 @@ mod exhaustive {
         }
     }
 }
+
+/// parry's double-precision intersection test, trusted by [`parry_convert::intersects`] without
+/// a second query, never calls shapes intersecting that a certified slab separates: the Panda's
+/// grown hulls against boxes and against each other, placed within 3 mm of contact in random
+/// directions and turns (300,000 placements when this was measured: none; single precision
+/// had called a capsule 2.8 mm from a block intersecting).
+#[test]
+fn the_intersection_test_has_no_false_positives_near_contact() {
+    use akl_tsr::nalgebra::{Translation3, UnitQuaternion, Vector3};
+    use parry3d_f64::shape::SharedShape;
+    use rand::{Rng, SeedableRng};
+    let robot = Robot::panda().unwrap();
+    let model = RobotCollision::new(&robot);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let boxes = [
+        SharedShape::cuboid(0.2, 0.1, 0.02),
+        SharedShape::cuboid(0.03, 0.03, 0.03),
+    ];
+    let at = |pose: &Pose| parry_convert::pose(pose);
+    let mut hits = 0;
+    for _ in 0..3000 {
+        let a = &model.bodies[rng.gen_range(0..model.bodies.len())].world_shape;
+        let b = if rng.gen_bool(0.5) {
+            boxes[rng.gen_range(0..2)].clone()
+        } else {
+            model.bodies[rng.gen_range(0..model.bodies.len())]
+                .world_shape
+                .clone()
+        };
+        let turn = UnitQuaternion::from_euler_angles(
+            rng.gen_range(-3.0..3.0),
+            rng.gen_range(-3.0..3.0),
+            rng.gen_range(-3.0..3.0),
+        );
+        let dir = Vector3::new(
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        )
+        .normalize();
+        let placed = |d: f64| Pose::from_parts(Translation3::from(dir * d), turn);
+        let apart =
+            |d: f64| parry_convert::distance(a, &Pose::identity(), &b, &placed(d)).unwrap() > 0.0;
+        let (mut lo, mut hi) = (0.0, 0.6);
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if apart(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let d = hi + rng.gen_range(-0.003..0.003);
+        let hit = parry3d_f64::query::intersection_test(
+            &at(&Pose::identity()),
+            a.as_ref(),
+            &at(&placed(d)),
+            b.as_ref(),
+        )
+        .unwrap()
+        .intersecting;
+        assert!(!(hit && apart(d)), "called intersecting {d} m out");
+        hits += usize::from(hit);
+    }
+    assert!(hits > 1000, "only {hits} placements intersect");
+}
