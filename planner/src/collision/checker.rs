@@ -260,8 +260,9 @@ impl<'a> Checker<'a> {
                 if tabled > 0.0 && pr.settled(moved, self_slack + tabled) {
                     continue;
                 }
-                let balls_gap = centres_sq.sqrt() - balls;
-                if balls_gap > 0.0 && pr.settled(moved, self_slack + balls_gap) {
+                if centres_sq > balls * balls
+                    && pr.settled_sq(moved, self_slack - balls, centres_sq)
+                {
                     continue;
                 }
                 let gap = segment_distance_sq(&pa.a, &pa.b, &pb.a, &pb.b).sqrt() - reach;
@@ -319,7 +320,7 @@ impl<'a> Checker<'a> {
                     }
                     return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 };
-                if gap_sq > 0.0 && pr.settled(moved, slack + gap_sq.sqrt()) {
+                if gap_sq > 0.0 && pr.settled_sq(moved, slack, gap_sq) {
                     continue;
                 }
                 let at = place.get_or_insert_with(|| Placement::of(&p.pose));

@@ -49,6 +49,13 @@ impl Proof<'_> {
         self.useful_clearance(moved, slack) <= 0.0
     }
 
+    /// [`Proof::settled`] for the clearance `slack + √distance_sq`, without the square root
+    /// (checks take it for every element and object whose boxes are apart).
+    pub(super) fn settled_sq(&self, moved: f64, slack: f64, distance_sq: f64) -> bool {
+        let useful = self.useful_clearance(moved, slack);
+        useful <= 0.0 || distance_sq >= useful * useful
+    }
+
     /// Limits the fraction to what `slack` (clearance plus half the margin) allows an element
     /// moving up to `moved` over the whole stretch.
     pub(super) fn limit(&mut self, moved: f64, slack: f64) {
