@@ -100,7 +100,7 @@ pub fn run_trial(
                 None => report.failures.push(
                     Failure::new(
                         Cause::NoPlan,
-                        "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link)",
+                        "the robot's gripper cannot be simulated (it needs two prismatic fingers on one link, or a knuckle whose mimic joints move two fingertips)",
                     )
                     .at_time(0.0),
                 ),
