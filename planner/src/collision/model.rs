@@ -249,7 +249,9 @@ impl RobotCollision {
         let tables = robot.pair_tables(margins.self_, || {
             self_pairs
                 .iter()
-                .map(|&(i, j)| PairTable::for_pair(robot, &bodies[i], &bodies[j]))
+                .map(|&(i, j)| {
+                    PairTable::for_pair(robot, &bodies[i], &bodies[j], 0.5 * margins.self_)
+                })
                 .collect()
         });
         RobotCollision {

@@ -53,6 +53,8 @@ struct TableJoint {
 /// grid of the one or two arm joints that move them against each other.
 pub(crate) struct PairTable {
     joints: SmallVec<[TableJoint; 2]>,
+    /// How much the model grew each element for the other (half its self margin).
+    grow: f64,
     cells: Box<[AtomicU32]>,
 }
 
@@ -60,6 +62,7 @@ impl std::fmt::Debug for PairTable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("PairTable")
             .field("joints", &self.joints)
+            .field("grow", &self.grow)
             .field("nodes", &self.cells.len())
             .finish()
     }
@@ -132,9 +135,10 @@ fn to_axis(p: &Vector3<f64>, origin: &Vector3<f64>, axis: &Vector3<f64>) -> f64 
 }
 
 impl PairTable {
-    /// A table for elements `a` and `b` of `robot`, if one or two arm joints, each used once,
-    /// are all that move one against the other (and nothing moves the other side).
-    pub(super) fn for_pair(robot: &Robot, a: &Body, b: &Body) -> Option<PairTable> {
+    /// A table for elements `a` and `b` of `robot`, each grown by `grow` for the other, if
+    /// one or two arm joints, each used once, are all that move one against the other (and
+    /// nothing moves the other side).
+    pub(super) fn for_pair(robot: &Robot, a: &Body, b: &Body, grow: f64) -> Option<PairTable> {
         let kin = robot.kinematics();
         let top = common_ancestor(kin, a.link, b.link)?;
         let (on_a, on_b) = (
@@ -195,6 +199,7 @@ impl PairTable {
         let nodes = joints.iter().map(|j| j.count).product();
         Some(PairTable {
             joints,
+            grow,
             cells: (0..nodes).map(|_| AtomicU32::new(UNKNOWN)).collect(),
         })
     }
@@ -247,9 +252,8 @@ impl PairTable {
         } else {
             parry_convert::overlap_point(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
                 .and_then(|w| {
-                    let grow = 0.5 * robot.config().collision.self_margin;
-                    let depth =
-                        depth_in(a, &pa.pose, grow, &w)?.min(depth_in(b, &pb.pose, grow, &w)?);
+                    let depth = depth_in(a, &pa.pose, self.grow, &w)?
+                        .min(depth_in(b, &pb.pose, self.grow, &w)?);
                     (depth > 0.0).then_some(-depth)
                 })
                 .unwrap_or(0.0)
@@ -331,7 +335,7 @@ fn depth_in(body: &Body, pose: &akl_tsr::Pose, grow: f64, w: &Vector3<f64>) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::RobotCollision;
+    use crate::collision::{Margins, RobotCollision};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -383,16 +387,84 @@ mod tests {
     /// The bound never exceeds parry's distance, anywhere in a cell (random configurations,
     /// and the middles between nodes, where the offset is largest), a pair it calls
     /// overlapping does overlap, and it settles most configurations of the forearm against
-    /// link 7 and the hand either way.
+    /// link 7 and the hand either way; with the robot's margins and with a model whose
+    /// elements are not grown for each other (as `akl robot check --margin 0` builds).
     #[test]
     fn the_table_is_never_wrong_and_settles_most_wrists() {
         let robot = Robot::panda().unwrap();
-        let model = RobotCollision::new(&robot);
+        let bare = Margins {
+            arm: 0.0,
+            hand: 0.0,
+            held: 0.0,
+            self_: 0.0,
+        };
+        for model in [
+            RobotCollision::new(&robot),
+            RobotCollision::with_margins(&robot, bare),
+        ] {
+            never_wrong_on(&robot, &model);
+        }
+    }
+
+    /// Where a node's elements overlap, the depth it stores (a point deep in both) is never
+    /// more than parry's penetration depth there, with the robot's margins and without any.
+    #[test]
+    fn an_overlap_is_never_deeper_than_the_penetration() {
+        let robot = Robot::panda().unwrap();
+        let bare = Margins {
+            arm: 0.0,
+            hand: 0.0,
+            held: 0.0,
+            self_: 0.0,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for model in [
+            RobotCollision::new(&robot),
+            RobotCollision::with_margins(&robot, bare),
+        ] {
+            let mut overlaps = 0;
+            for (t, a, b) in tabled(&model) {
+                for _ in 0..2000 {
+                    let values: Vec<f64> = t
+                        .joints
+                        .iter()
+                        .map(|j| j.lo + rng.gen_range(0..j.count) as f64 * j.step)
+                        .collect();
+                    let value = f64::from(t.node_value(&robot, a, b, &values));
+                    if value >= 0.0 {
+                        continue;
+                    }
+                    overlaps += 1;
+                    let mut q = robot.ready().to_vec();
+                    for (j, v) in t.joints.iter().zip(&values) {
+                        q[j.index] = *v;
+                    }
+                    let poses = robot.kinematics().link_poses(&q, robot.open_width());
+                    let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
+                    let depth = parry_convert::penetration(
+                        &a.self_shape,
+                        &pa.pose,
+                        &b.self_shape,
+                        &pb.pose,
+                    )
+                    .unwrap();
+                    assert!(
+                        -value <= depth + 1e-9,
+                        "{} deep, parry {depth} at {q:?}",
+                        -value
+                    );
+                }
+            }
+            assert!(overlaps > 100, "only {overlaps} overlapping nodes");
+        }
+    }
+
+    fn never_wrong_on(robot: &Robot, model: &RobotCollision) {
         let mut rng = ChaCha8Rng::seed_from_u64(21);
-        for (t, a, b) in tabled(&model) {
+        for (t, a, b) in tabled(model) {
             let (mut free, mut apart, mut hit, mut overlapping) = (0, 0, 0, 0);
             for k in 0..3000 {
-                let mut q = random_q(&robot, &mut rng);
+                let mut q = random_q(robot, &mut rng);
                 if k % 2 == 1 {
                     for j in &t.joints {
                         let i = ((q[j.index] - j.lo) / j.step).floor();
@@ -405,7 +477,7 @@ mod tests {
                     .unwrap();
                 let meet =
                     parry_convert::intersects(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose);
-                match t.lookup(&robot, a, b, &q) {
+                match t.lookup(robot, a, b, &q) {
                     Tabled::Apart(bound) => {
                         assert!(bound <= d, "bound {bound} above the distance {d} at {q:?}");
                         apart += usize::from(bound > 0.0);
@@ -467,7 +539,7 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
         let (t, a, b) = tabled(&model)[0];
-        let fresh = PairTable::for_pair(&robot, a, b).unwrap();
+        let fresh = PairTable::for_pair(&robot, a, b, t.grow).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..50 {
             let q = random_q(&robot, &mut rng);
