@@ -31,9 +31,9 @@ pub(super) type LinkPoses = SmallVec<[Pose; INLINE_LINKS]>;
 /// Placed collision elements of one configuration.
 pub(super) type PlacedBodies = SmallVec<[Placed; INLINE_BODIES]>;
 
-/// What parry's single-precision distances are trusted to (metres): clearances it reports
-/// are reduced by this much before they are relied on.
-const DISTANCE_TOLERANCE: f64 = 1e-5;
+/// What parry's distances are trusted to (metres): clearances it reports are reduced by
+/// this much before they are relied on (the checker's and the wrist tables').
+pub(super) const DISTANCE_TOLERANCE: f64 = 1e-5;
 
 /// Checks configurations of one robot in one scene.
 #[derive(Debug, Clone)]

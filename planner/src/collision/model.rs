@@ -249,8 +249,10 @@ impl RobotCollision {
         let tables = robot.pair_tables(margins.self_, || {
             self_pairs
                 .iter()
-                .map(|&(i, j)| {
-                    PairTable::for_pair(robot, &bodies[i], &bodies[j], 0.5 * margins.self_)
+                .zip(&self_shared)
+                .map(|(&(i, j), &s)| {
+                    let beyond = [&chains[i][s..], &chains[j][s..]];
+                    PairTable::for_pair(robot, &bodies[i], &bodies[j], beyond, 0.5 * margins.self_)
                 })
                 .collect()
         });

@@ -12,8 +12,9 @@
 //! alone (it is computed at the robot's ready configuration with the table's joints set), so
 //! what a check concludes never depends on which checks ran before it.
 
+use super::checker::DISTANCE_TOLERANCE;
 use super::cull::placed;
-use super::model::Body;
+use super::model::{Body, Mover};
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
 use crate::parry_convert;
@@ -32,9 +33,6 @@ const MAX_NODES: usize = 1 << 18;
 
 /// The stored pattern of a node not computed yet (a NaN, which no distance is).
 const UNKNOWN: u32 = u32::MAX;
-
-/// What parry's distances are trusted to (metres), as in the checker.
-const DISTANCE_TOLERANCE: f64 = 1e-5;
 
 /// One joint a table runs over.
 #[derive(Debug, Clone, Copy)]
@@ -68,65 +66,19 @@ impl std::fmt::Debug for PairTable {
     }
 }
 
-/// An arm-driven revolute joint on the way from one element to the other.
-struct PathJoint {
-    /// The link it turns.
-    link: usize,
-    /// Its arm joint and the multiplier of that joint's value.
-    index: usize,
-    scale: f64,
-    /// Its axis in the link frame.
-    axis: Vector3<f64>,
-}
-
-/// The arm-driven revolute joints between `link` and its ancestor `above` (excluded), nearest
-/// the base first; `None` if anything else moves on the way (a gripper or prismatic joint).
-fn revolutes_between(kin: &Kinematics, link: usize, above: usize) -> Option<Vec<PathJoint>> {
+/// Whether the gripper's opening moves `link` (a finger, or anything beyond one).
+fn moves_with_gripper(kin: &Kinematics, link: usize) -> bool {
     let links = kin.links();
-    let mut found = Vec::new();
-    let mut at = link;
-    while at != above {
-        match links[at].motion {
-            Motion::Fixed
-            | Motion::Revolute {
-                drive: Drive::Constant(_),
-                ..
+    let mut at = Some(link);
+    while let Some(i) = at {
+        if let Motion::Revolute { drive, .. } | Motion::Prismatic { drive, .. } = links[i].motion {
+            if matches!(drive, Drive::Width { .. }) {
+                return true;
             }
-            | Motion::Prismatic {
-                drive: Drive::Constant(_),
-                ..
-            } => {}
-            Motion::Revolute {
-                axis,
-                drive: Drive::Arm { index, scale, .. },
-            } => found.push(PathJoint {
-                link: at,
-                index,
-                scale,
-                axis: axis.into_inner(),
-            }),
-            _ => return None,
         }
-        at = links[at].parent?;
+        at = links[i].parent;
     }
-    found.reverse();
-    Some(found)
-}
-
-/// The nearest common ancestor of two links.
-fn common_ancestor(kin: &Kinematics, a: usize, b: usize) -> Option<usize> {
-    let links = kin.links();
-    let mut above_a = vec![a];
-    while let Some(p) = links[*above_a.last()?].parent {
-        above_a.push(p);
-    }
-    let mut at = b;
-    loop {
-        if above_a.contains(&at) {
-            return Some(at);
-        }
-        at = links[at].parent?;
-    }
+    false
 }
 
 /// Distance from `p` to the line through `origin` along the unit vector `axis`.
@@ -135,19 +87,25 @@ fn to_axis(p: &Vector3<f64>, origin: &Vector3<f64>, axis: &Vector3<f64>) -> f64 
 }
 
 impl PairTable {
-    /// A table for elements `a` and `b` of `robot`, each grown by `grow` for the other, if
-    /// one or two arm joints, each used once, are all that move one against the other (and
-    /// nothing moves the other side).
-    pub(super) fn for_pair(robot: &Robot, a: &Body, b: &Body, grow: f64) -> Option<PairTable> {
+    /// A table for elements `a` and `b` of `robot`, each grown by `grow` for the other, whose
+    /// chains of arm joints (the model's `chains`) go on past their shared joints with `beyond`: if
+    /// one or two arm joints, each turning and used once, are all that move one element
+    /// against the other (and neither moves with the gripper).
+    pub(super) fn for_pair(
+        robot: &Robot,
+        a: &Body,
+        b: &Body,
+        beyond: [&[Mover]; 2],
+        grow: f64,
+    ) -> Option<PairTable> {
         let kin = robot.kinematics();
-        let top = common_ancestor(kin, a.link, b.link)?;
-        let (on_a, on_b) = (
-            revolutes_between(kin, a.link, top)?,
-            revolutes_between(kin, b.link, top)?,
-        );
-        let (moving, path) = match (on_a.is_empty(), on_b.is_empty()) {
-            (true, false) => (b, on_b),
-            (false, true) => (a, on_a),
+        if moves_with_gripper(kin, a.link) || moves_with_gripper(kin, b.link) {
+            return None;
+        }
+        let (moving, path) = match beyond {
+            [[], []] => return None,
+            [[], path] => (b, path),
+            [path, []] => (a, path),
             _ => return None,
         };
         if path.len() > 2 || (path.len() == 2 && path[0].index == path[1].index) {
@@ -159,17 +117,18 @@ impl PairTable {
         let at = placed(moving, &poses[moving.link]);
         let centre = 0.5 * (at.a + at.b);
         let radius = moving.half_segment + moving.self_radius;
-        let axis_of = |j: &PathJoint| {
-            (
-                poses[j.link].translation.vector,
-                poses[j.link].rotation * j.axis,
-            )
-        };
-        let last = axis_of(&path[path.len() - 1]);
+        let axes = path
+            .iter()
+            .map(|m| {
+                let turned = poses[m.link];
+                Some((turned.translation.vector, turned.rotation * m.axis?))
+            })
+            .collect::<Option<SmallVec<[_; 2]>>>()?;
+        let last = axes[path.len() - 1];
         let mut reaches = vec![0.0; path.len()];
         reaches[path.len() - 1] = to_axis(&centre, &last.0, &last.1) + radius;
         if path.len() == 2 {
-            let first = axis_of(&path[0]);
+            let first = axes[0];
             reaches[0] = to_axis(&last.0, &first.0, &first.1) + (centre - last.0).norm() + radius;
         }
         let limits = robot.joint_limits();
@@ -539,7 +498,15 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
         let (t, a, b) = tabled(&model)[0];
-        let fresh = PairTable::for_pair(&robot, a, b, t.grow).unwrap();
+        let (p, &(i, j)) = model
+            .self_pairs
+            .iter()
+            .enumerate()
+            .find(|(p, _)| model.tables[*p].is_some())
+            .unwrap();
+        let s = model.self_shared[p];
+        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
+        let fresh = PairTable::for_pair(&robot, a, b, beyond, t.grow).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..50 {
             let q = random_q(&robot, &mut rng);
