@@ -14,9 +14,10 @@
 //! Lengths come from the URDF: [`PandaIk::from_kinematics`] checks that the arm has the
 //! Panda's modified-DH structure and reads d1, d3, a4, a5, d5 and a7 from the joint origins.
 
+use super::pose_error;
 use crate::error::PandaIkError;
 use crate::fk::{Drive, Kinematics, Motion};
-use akl_tsr::nalgebra::{Matrix3, Matrix6, Rotation3, Vector3, Vector6};
+use akl_tsr::nalgebra::{Matrix3, Matrix6, Rotation3, Vector3};
 use akl_tsr::Pose;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -375,20 +376,14 @@ impl PandaIk {
         Self::verified(kin, &q, tcp).then_some(q)
     }
 
-    /// `q` moved by Gauss–Newton steps on joints 1–6 (joint 7 held) until forward kinematics
-    /// meets `tcp` to rounding. The closed form loses digits near the stretched elbow (q4 at
-    /// its extreme), where the elbow circle shrinks to a point and its angle comes from a
-    /// ratio of two vanishing lengths: there a candidate can be 1e-7 m off and 1e-5 rad away
-    /// from the exact solution it stands for. A step is kept only if it lowers the error and
-    /// stays within the limits.
+    /// `q` moved by damped Gauss–Newton steps on joints 1–6 (joint 7 held) until forward
+    /// kinematics meets `tcp` to rounding. The closed form leaves errors where it settles a
+    /// singularity: in the shoulder-singular band it sets q2 to 0 (up to [`SHOULDER_SINGULAR`]
+    /// times the reach off), and at the stretched elbow q4 comes from an arc cosine near 1.
+    /// A step is kept only if it lowers the error and stays within the limits.
     fn polished(&self, kin: &Kinematics, tcp: &Pose, mut q: [f64; DOF]) -> [f64; DOF] {
-        let error = |pose: &Pose| {
-            let dp = tcp.translation.vector - pose.translation.vector;
-            let dr = (tcp.rotation * pose.rotation.inverse()).scaled_axis();
-            Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
-        };
         let (pose, mut jac) = kin.tcp_jacobian(&q);
-        let mut err = error(&pose);
+        let mut err = pose_error(&pose, tcp);
         for _ in 0..POLISH_STEPS {
             if err.norm() < POLISH_TOLERANCE {
                 break;
@@ -412,7 +407,7 @@ impl PandaIk {
                 break;
             }
             let (next_pose, next_jac) = kin.tcp_jacobian(&next);
-            let next_err = error(&next_pose);
+            let next_err = pose_error(&next_pose, tcp);
             if next_err.norm() >= err.norm() {
                 break;
             }

@@ -1,8 +1,9 @@
 //! Generic numerical inverse kinematics: damped least squares with joint limits and random
 //! restarts, for arms without an analytic solver.
 
+use super::pose_error;
 use crate::fk::Kinematics;
-use akl_tsr::nalgebra::{Matrix6, Vector6};
+use akl_tsr::nalgebra::Matrix6;
 use akl_tsr::Pose;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -50,12 +51,12 @@ impl DlsIk {
         let lambda_sq = self.damping * self.damping;
         for _ in 0..self.iterations {
             let (pose, jac) = kin.tcp_jacobian(&q);
-            let dp = tcp.translation.vector - pose.translation.vector;
-            let dr = (tcp.rotation * pose.rotation.inverse()).scaled_axis();
-            if dp.norm() <= self.position_tolerance && dr.norm() <= self.rotation_tolerance {
+            let err = pose_error(&pose, tcp);
+            if err.fixed_rows::<3>(0).norm() <= self.position_tolerance
+                && err.fixed_rows::<3>(3).norm() <= self.rotation_tolerance
+            {
                 return Some(q);
             }
-            let err = Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z);
             let jjt: Matrix6<f64> = &jac * jac.transpose() + Matrix6::identity() * lambda_sq;
             let y = jjt.cholesky()?.solve(&err);
             let dq = jac.transpose() * y;

@@ -8,10 +8,19 @@ mod trac;
 
 use crate::error::IkError;
 use crate::fk::Kinematics;
+use akl_tsr::nalgebra::Vector6;
 use akl_tsr::Pose;
 pub(crate) use analytic::PandaIk;
 pub(crate) use dls::DlsIk;
 pub use trac::TracIk;
+
+/// The pose error `[Δposition, Δrotation]` (base frame) of the TCP at `pose` from `target`,
+/// what every numerical step here drives to zero.
+fn pose_error(pose: &Pose, target: &Pose) -> Vector6<f64> {
+    let dp = target.translation.vector - pose.translation.vector;
+    let dr = (target.rotation * pose.rotation.inverse()).scaled_axis();
+    Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
+}
 
 /// The solver a robot uses (chosen in `robot.toml`).
 #[derive(Debug, Clone)]

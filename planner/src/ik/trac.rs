@@ -13,6 +13,7 @@
 //! restarts from its own seeded generator, so the answer never depends on timing.
 
 use super::dls::DlsIk;
+use super::pose_error;
 use crate::fk::Kinematics;
 use akl_tsr::nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 use akl_tsr::Pose;
@@ -44,13 +45,6 @@ struct Racer {
 enum Method {
     Dls,
     Lm,
-}
-
-/// The pose error `[Δposition, Δrotation]` (base frame) of the TCP at `pose` from `target`.
-fn error(pose: &Pose, target: &Pose) -> Vector6<f64> {
-    let dp = target.translation.vector - pose.translation.vector;
-    let dr = (target.rotation * pose.rotation.inverse()).scaled_axis();
-    Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
 }
 
 impl TracIk {
@@ -87,7 +81,7 @@ impl TracIk {
         }
         r.steps += 1;
         let (pose, jac) = kin.tcp_jacobian(&r.q);
-        let e = error(&pose, target);
+        let e = pose_error(&pose, target);
         if self.reached(&e) {
             return true;
         }
@@ -125,7 +119,7 @@ impl TracIk {
                     *v += d;
                 }
                 self.clamp(&mut trial);
-                let better = error(&kin.tcp_pose(&trial), target).norm() < r.error;
+                let better = pose_error(&kin.tcp_pose(&trial), target).norm() < r.error;
                 if better {
                     r.mu = (r.mu * 0.3).max(1e-12);
                     r.q = trial;
