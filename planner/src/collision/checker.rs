@@ -302,12 +302,11 @@ impl<'a> Checker<'a> {
             let bounds = bounding_box(p, b.world_radius);
             let role = model.role(b);
             let mut place: Option<Placement> = None;
-            for (index, [min, max]) in self.scene.boxes.iter().enumerate() {
-                let gap_sq = box_gap_sq(&bounds, min, max);
+            for (index, o) in self.scene.obstacles.iter().enumerate() {
+                let gap_sq = box_gap_sq(&bounds, &o.target.min, &o.target.max);
                 if gap_sq > 0.0 && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
                     continue;
                 }
-                let o = &self.scene.obstacles[index];
                 if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;
                 }

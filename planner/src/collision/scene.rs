@@ -3,7 +3,6 @@
 use super::spheres::Target;
 use crate::parry_convert;
 use akl_scene::World;
-use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use parry3d_f64::shape::SharedShape;
 
@@ -22,9 +21,6 @@ pub(super) struct Obstacle {
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub(super) obstacles: Vec<Obstacle>,
-    /// The obstacles' world-axis-aligned boxes (lower and upper corners), side by side: every
-    /// check tests each element against all of them, and most tests end there.
-    pub(super) boxes: Vec<[Vector3<f64>; 2]>,
     pub(super) base: Pose,
     pub(super) mount: Option<usize>,
 }
@@ -53,13 +49,8 @@ impl Scene {
             let inside = |i: usize| origin[i] >= min[i] - 1e-9 && origin[i] <= max[i] + 1e-9;
             inside(0) && inside(1) && (max.z - origin.z).abs() <= akl_scene::SUPPORT_GAP
         });
-        let boxes = obstacles
-            .iter()
-            .map(|o| [o.target.min, o.target.max])
-            .collect();
         Scene {
             obstacles,
-            boxes,
             base,
             mount,
         }
