@@ -192,18 +192,16 @@ impl Gripper {
                 let load = weld.load(sim);
                 event.peak_load = event.peak_load.max(load.force);
                 if weld.overloaded(&load) {
-                    let pushed = match strongest_push(sim, h.object) {
-                        Some((Owner::Object(o), f)) => {
-                            format!(", as {} pushed it with {f:.1} N", sim.objects[o].name)
-                        }
-                        Some((Owner::Link(l), f)) => format!(
-                            ", as {} pushed it with {f:.1} N",
-                            self.link_names
+                    let pushed = strongest_push(sim, h.object).map_or(String::new(), |(by, f)| {
+                        let name = match by {
+                            Owner::Object(o) => sim.objects[o].name.as_str(),
+                            Owner::Link(l) => self
+                                .link_names
                                 .get(l)
-                                .map_or("a robot link", String::as_str)
-                        ),
-                        None => String::new(),
-                    };
+                                .map_or("a robot link", String::as_str),
+                        };
+                        format!(", as {name} pushed it with {f:.1} N")
+                    });
                     event.broke_by = Some(format!("{}{pushed}", weld.overload_text(&load)));
                     weld.release(sim);
                     h.weld = None;
