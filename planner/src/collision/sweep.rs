@@ -64,3 +64,31 @@ impl Proof<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Settling on a squared distance decides as settling on the distance itself: a pair
+        /// whose clearance would shorten the stretch is never skipped.
+        #[test]
+        fn settling_on_a_squared_distance_decides_as_on_the_distance(
+            moved in 0.0..0.5f64,
+            slack in -0.05..0.05f64,
+            distance in 0.0..0.3f64,
+            fraction in 0.0..1.0f64,
+        ) {
+            let sweep = Sweep { half: Vec::new(), bounds: Vec::new() };
+            let proof = Proof { sweep: &sweep, offsets: &[], fraction };
+            let exact = proof.settled(moved, slack + distance);
+            let squared = proof.settled_sq(moved, slack, distance * distance);
+            // Equal up to the rounding of a square; never settled where the distance is short.
+            let useful = proof.useful_clearance(moved, slack);
+            if (distance - useful).abs() > 1e-12 {
+                prop_assert_eq!(exact, squared);
+            }
+        }
+    }
+}
