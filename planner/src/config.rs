@@ -99,7 +99,8 @@ pub struct CollisionConfig {
     pub arm_margin: f64,
     /// Clearance between hand links and the world (metres).
     pub hand_margin: f64,
-    /// Clearance between a held object and the world (metres).
+    /// Clearance between a held object and fixed objects (metres); from movable objects and
+    /// the arm it keeps the larger of this and `hand_margin`.
     pub held_margin: f64,
     /// Clearance between link pairs that are checked against each other (metres).
     pub self_margin: f64,

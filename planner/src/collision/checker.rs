@@ -365,8 +365,14 @@ impl<'a> Checker<'a> {
                     }
                     continue;
                 }
-                let slack = 0.5 * h.margin;
-                if !clear_of(&h.grown, &ball, &bounds, o, proof.as_mut(), moved, slack) {
+                // A movable object is only where it was perceived: keep the larger margin.
+                let (shape, margin) = if o.movable {
+                    (&h.near_arm, h.arm_margin)
+                } else {
+                    (&h.grown, h.margin)
+                };
+                let slack = 0.5 * margin;
+                if !clear_of(shape, &ball, &bounds, o, proof.as_mut(), moved, slack) {
                     return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }

@@ -2,8 +2,9 @@
 //! itself, with parry3d shapes and cheap bounding-box culling before each exact test.
 //!
 //! Margins (from `robot.toml`): arm links are grown by `arm_margin`, hand links by
-//! `hand_margin` and a held object by `held_margin` before being tested against the exact
-//! world objects; two links are each grown by half of `self_margin` before being tested
+//! `hand_margin` and a held object by `held_margin` (by the larger of it and `hand_margin`
+//! against movable objects and the arm) before being tested against the exact world
+//! objects; two links are each grown by half of `self_margin` before being tested
 //! against each other. Link pairs in `allowed_pairs` are never tested, nor `mount_links`
 //! against the object under the robot base.
 //!

@@ -14,6 +14,8 @@ pub(super) struct Obstacle {
     pub(super) pose: Pose,
     /// The object for closed-form distances from points, with its world-axis-aligned box.
     pub(super) target: Target,
+    /// Whether it is movable: placed where it was perceived, not where it is known to be.
+    pub(super) movable: bool,
 }
 
 /// The world as the checker sees it: exact object shapes with bounding boxes, the robot's
@@ -40,6 +42,7 @@ impl Scene {
                 shape,
                 pose: o.pose * fix,
                 target: Target::of(&o.shape, &o.pose),
+                movable: o.movable,
             });
         }
         let base = world.robot_base;

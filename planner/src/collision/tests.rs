@@ -154,6 +154,54 @@ mod checks {
         );
     }
 
+    /// A held object keeps the hand margin from a movable object (perceived, as the object in
+    /// the hand was), the held margin from a fixed one: a held ball 3.5 mm from a small box is
+    /// free beside furniture and refused beside a movable box (Panda: held 2 mm, hand 5 mm).
+    #[test]
+    fn a_held_object_keeps_the_hand_margin_from_movable_objects() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let margins = model.margins();
+        let gap = 0.5 * (margins.held + margins.hand);
+        assert!(margins.hand > gap && gap > margins.held);
+        let q = robot.ready();
+        let tcp = robot.tcp_pose(q);
+        // A 1 cm ball 8 cm beyond the TCP along its approach axis, clear of the fingers.
+        let centre = tcp * Pose::from_parts([0.0, 0.0, 0.08].into(), Default::default());
+        let ball = akl_scene::Shape::Sphere { radius: 0.01 };
+        let held = Held::new("ball", ball, tcp.inverse() * centre, &margins);
+        let side = tcp.rotation * akl_tsr::nalgebra::Vector3::x();
+        let half = 0.005;
+        let box_at = centre.translation.vector + side * (0.01 + gap + half);
+        let checked = |movable: bool| {
+            let world = World {
+                robot_base: Pose::identity(),
+                objects: vec![akl_scene::Object {
+                    name: "box".into(),
+                    shape: akl_scene::Shape::Box {
+                        size: [2.0 * half; 3],
+                    },
+                    pose: Pose::from_parts(box_at.into(), tcp.rotation),
+                    movable,
+                    mass: 0.1,
+                    friction: 0.5,
+                }],
+            };
+            let scene = Scene::new(&world, &[]);
+            let checker = Checker::new(&robot, &model, &scene);
+            assert!(
+                checker.check(q, 0.08, None, &none()).is_none(),
+                "the hand is clear"
+            );
+            checker.check(q, 0.08, Some(&held), &none())
+        };
+        assert_eq!(checked(false), None);
+        assert_eq!(
+            checked(true),
+            Some(Hit::HeldWorld("ball".into(), "box".into()))
+        );
+    }
+
     #[test]
     fn a_held_block_collides_with_its_support_unless_allowed() {
         let robot = Robot::panda().unwrap();
