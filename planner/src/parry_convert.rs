@@ -11,7 +11,7 @@ use akl_scene::Shape;
 use akl_tsr::nalgebra::{UnitQuaternion, Vector3};
 use akl_tsr::Pose;
 use parry3d_f64::math::{Pose as ParryPose, Rotation, Vector};
-use parry3d_f64::shape::SharedShape;
+use parry3d_f64::shape::{SharedShape, SupportMap};
 use std::f64::consts::FRAC_PI_2;
 
 /// A pose as parry's pose.
@@ -144,6 +144,12 @@ pub(crate) fn distance(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -
 /// [`distance`] for a caller that needs to know it only up to `reach`: where the shapes are
 /// further apart than that, `reach` itself, which GJK proves with a separating slab as soon as
 /// it finds one that wide, without converging on the distance.
+///
+/// A rounded shape (a grown hull, box or cylinder) is its core grown by a radius, so GJK runs
+/// on the two cores and the radii are taken off: on polytopes it ends in a few steps, where on
+/// their rounded surfaces it creeps towards parry's relative tolerance (a certified table node
+/// costs 2.9–3.5 µs instead of 4.5–6.1 µs). A capsule keeps its own support map (its core, a
+/// segment, gains nothing: GJK stopped as short of two capsules' distance either way).
 pub(crate) fn distance_up_to(
     a: &SharedShape,
     pa: &Pose,
@@ -154,18 +160,20 @@ pub(crate) fn distance_up_to(
     use parry3d_f64::query::closest_points::closest_points_support_map_support_map_with_params as gjk;
     use parry3d_f64::query::gjk::{GJKResult, VoronoiSimplex};
     let (qa, qb) = (pose(pa), pose(pb));
-    let (Some(sa), Some(sb)) = (a.as_support_map(), b.as_support_map()) else {
+    let (Some((sa, ra)), Some((sb, rb))) = (core(a), core(b)) else {
         return parry3d_f64::query::distance(&qa, a.as_ref(), &qb, b.as_ref())
             .ok()
             .map(|d| d.distance.clamp(0.0, reach));
     };
+    let radii = ra + rb;
     // Everything in `a`'s frame, where GJK answers.
     let ab = qa.inv_mul(&qb);
-    let slab = |n: Vector| sb.support_point(&ab, -n).dot(n) - sa.local_support_point(n).dot(n);
+    let slab =
+        |n: Vector| sb.support_point(&ab, -n).dot(n) - sa.local_support_point(n).dot(n) - radii;
     Some(
-        match gjk(&ab, sa, sb, reach, &mut VoronoiSimplex::new(), None) {
+        match gjk(&ab, sa, sb, reach + radii, &mut VoronoiSimplex::new(), None) {
             GJKResult::ClosestPoints(on_a, on_b, _) => match (on_b - on_a).try_normalize() {
-                Some(n) => slab(n).min((on_b - on_a).length()),
+                Some(n) => slab(n).min((on_b - on_a).length() - radii),
                 None => 0.0,
             },
             // A slab at least `reach` wide (or, should GJK give up, whatever it found).
@@ -174,6 +182,21 @@ pub(crate) fn distance_up_to(
         }
         .max(0.0),
     )
+}
+
+/// The shape a rounded parry shape grows, as a support map, and by how much it grows it (the
+/// shape itself and 0 for one that is not rounded); `None` for a shape without a support map.
+fn core(shape: &SharedShape) -> Option<(&dyn SupportMap, f64)> {
+    if let Some(r) = shape.as_round_convex_polyhedron() {
+        return Some((&r.inner_shape, r.border_radius));
+    }
+    if let Some(r) = shape.as_round_cuboid() {
+        return Some((&r.inner_shape, r.border_radius));
+    }
+    if let Some(r) = shape.as_round_cylinder() {
+        return Some((&r.inner_shape, r.border_radius));
+    }
+    shape.as_support_map().map(|s| (s, 0.0))
 }
 
 /// A point where two overlapping shapes overlap: the middle of parry's deepest contact points
@@ -225,6 +248,74 @@ mod tests {
             0.0..0.003,
             prop::option::of((-3.0..3.0, -3.0..3.0, -3.0..3.0).prop_map(|(x, y, z)| [x, y, z])),
         )
+    }
+
+    /// Between rounded shapes of every kind the planner builds (grown hulls, boxes and
+    /// cylinders, capsules, and plain boxes), the distance taken between their cores less
+    /// their radii is never above parry's own on the rounded shapes, and within 50 µm of it
+    /// (GJK's last direction leaves the slab across a cylinder's curved core, or between two
+    /// capsules, up to 13 µm short; parry measures capsules in closed form).
+    #[test]
+    fn distances_between_cores_agree_with_the_rounded_shapes() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let hull: Vec<V> = (0..30)
+            .map(|_| {
+                V::new(
+                    rng.gen_range(-0.05..0.05),
+                    rng.gen_range(-0.05..0.05),
+                    rng.gen_range(-0.1..0.1),
+                )
+            })
+            .collect();
+        let shapes = [
+            SharedShape::round_convex_hull(&hull, 0.004).unwrap(),
+            SharedShape::round_cuboid(0.03, 0.05, 0.02, 0.005),
+            SharedShape::round_cylinder(0.06, 0.03, 0.002),
+            SharedShape::capsule_z(0.08, 0.04),
+            SharedShape::cuboid(0.2, 0.3, 0.01),
+        ];
+        let mut apart = 0;
+        for _ in 0..3000 {
+            let (i, j) = (
+                rng.gen_range(0..shapes.len()),
+                rng.gen_range(0..shapes.len()),
+            );
+            let mut place = || {
+                let t = Translation3::new(
+                    rng.gen_range(-0.15..0.15),
+                    rng.gen_range(-0.15..0.15),
+                    rng.gen_range(-0.15..0.15),
+                );
+                let r = Vector3::new(
+                    rng.gen_range(-3.0..3.0),
+                    rng.gen_range(-3.0..3.0),
+                    rng.gen_range(-3.0..3.0),
+                );
+                Pose::from_parts(t, UnitQuaternion::from_scaled_axis(r))
+            };
+            let (pa, pb) = (place(), place());
+            let ours = distance(&shapes[i], &pa, &shapes[j], &pb).unwrap();
+            let theirs = parry3d_f64::query::distance(
+                &pose(&pa),
+                shapes[i].as_ref(),
+                &pose(&pb),
+                shapes[j].as_ref(),
+            )
+            .unwrap()
+            .distance
+            .max(0.0);
+            assert!(
+                ours <= theirs + 1e-9,
+                "{ours} above parry's {theirs} ({i}, {j})"
+            );
+            assert!(
+                ours >= theirs - 5e-5,
+                "{ours} below parry's {theirs} ({i}, {j})"
+            );
+            apart += usize::from(theirs > 0.0);
+        }
+        assert!(apart > 1000, "{apart} placements apart");
     }
 
     proptest! {
