@@ -22,7 +22,7 @@
 use crate::convert::{link_collider, to_sim};
 use crate::world::{link_groups, Owner, SimWorld};
 use akl_planner::collision::ExactShape;
-use akl_planner::{Drive, HandModel, LocalBox, Motion};
+use akl_planner::{Drive, HandModel, LocalBox, Motion, PUSH_SHARE};
 use akl_planner::{Geometry, Robot, ShapeRole};
 use akl_tsr::nalgebra::{Matrix3, Point3, Rotation3};
 use akl_tsr::Pose;
@@ -199,10 +199,6 @@ fn closing_step(pads: &[PadReading; 2], pad_step: f64) -> f64 {
         (false, false) => a.min(b).min(pad_step),
     }
 }
-
-/// Share of the closing speed at which a pad that touches pushes the object towards the other:
-/// half, so the object slides to the middle instead of being knocked over.
-pub(crate) const PUSH_SHARE: f64 = 0.5;
 
 /// The simulated arm and gripper.
 pub(crate) struct SimArm {

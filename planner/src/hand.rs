@@ -25,6 +25,12 @@ use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use parry3d_f64::shape::SharedShape;
 
+/// Share of the closing speed at which the fingers go on once one pad touches what they close
+/// on: that pad pushes the object towards the other at half speed, so it slides to the middle
+/// instead of being knocked over. The simulation closes so, and the planner gives a grasp the
+/// time its centring takes.
+pub const PUSH_SHARE: f64 = 0.5;
+
 /// An axis-aligned box in some frame: its centre and half extents.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocalBox {

@@ -57,7 +57,7 @@ pub use error::{
 pub use fk::{Drive, Kinematics, Link, Motion};
 pub use geometry::{Geometry, LinkShape, RoundHull, ShapeRole};
 pub use goal::{keyframe_stream, GoalOptions, GoalStrategy};
-pub use hand::{Finger, HandModel, LocalBox};
+pub use hand::{Finger, HandModel, LocalBox, PUSH_SHARE};
 pub use line::{distance_to_segment, LineOptions};
 pub use meshes::{LinkMesh, MeshRole, PackagePath};
 pub use options::{PlanBudget, PlanOptions, MS_PER_KEYFRAME};

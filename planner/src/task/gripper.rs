@@ -1,6 +1,9 @@
 //! Grasps and releases: approaching, closing or opening, and backing off.
 
-use super::{backed_off, centred_in_hand, grasp_width, line_error, Holding, PlannedLine, Planner};
+use super::{
+    backed_off, centred_in_hand, centring_offset, grasp_width, line_error, Holding, PlannedLine,
+    Planner,
+};
 use crate::collision::Held;
 use crate::contact_rules::Step;
 use crate::error::PlanError;
@@ -34,6 +37,7 @@ impl Planner<'_> {
         }
         let support = self.world.support_of(object).map(|s| s.name.clone());
         let in_tcp = centred_in_hand(&tcp, &o.pose, &o.shape);
+        let offset = centring_offset(&o.shape, &o.pose, &tcp);
         self.events.push(GripperEvent {
             t: self.t,
             action: GripperAction::Close,
@@ -57,7 +61,7 @@ impl Planner<'_> {
             resting_on: support.as_deref(),
             ..Step::default()
         };
-        self.gripper_segment(i, width, closing.allowances());
+        self.gripper_segment(i, width, offset, closing.allowances());
         if next_line {
             return Ok(());
         }
@@ -120,7 +124,7 @@ impl Planner<'_> {
             ..Step::default()
         }
         .allowances();
-        self.gripper_segment(i, self.robot.open_width(), released);
+        self.gripper_segment(i, self.robot.open_width(), 0.0, released);
         self.holding = None;
         if let Some(o) = self.world.object_mut(&name) {
             o.pose = placed;

@@ -183,6 +183,23 @@ fn grasp_width(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
     }
 }
 
+/// How far the object's middle between the pads lies from the fingers' midline (along the
+/// TCP y axis), which the fingers push it across as they close: for a cylinder or capsule, the
+/// point of its axis nearest the TCP (a long one tilted across the fingers is held there, not
+/// at its centre); for other shapes their centre.
+fn centring_offset(shape: &Shape, object: &Pose, tcp: &Pose) -> f64 {
+    let local = tcp.inverse() * object;
+    let centre = local.translation.vector;
+    let middle = match *shape {
+        Shape::Cylinder { .. } | Shape::Capsule { .. } => {
+            let axis = local.rotation * Vector3::z();
+            centre - axis * centre.dot(&axis)
+        }
+        _ => centre,
+    };
+    middle.y.abs()
+}
+
 /// Where an object grasped with the TCP at `tcp` sits in the TCP frame once the fingers have
 /// closed on it: a parallel gripper pushes what it closes on to the middle between its fingers,
 /// so the object's centre ends on the closing axis's midpoint (TCP y = 0), whatever error its

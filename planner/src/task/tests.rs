@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::check::{recheck, RecheckOptions};
+use crate::hand::PUSH_SHARE;
 use crate::plan::{GripperAction, SegmentKind};
 use crate::robot::PANDA_TOML;
 use crate::rrt::RrtOptions;
@@ -287,4 +288,73 @@ fn randomized_worlds_plan_soundly() {
             assert!(violations.is_empty(), "{name}: {}", violations[0]);
         }
     }
+}
+
+/// A long cylinder tilted across the fingers is pushed to the midline where its axis passes
+/// under the TCP, not where its centre lies.
+#[test]
+fn a_tilted_cylinder_is_centred_where_its_axis_passes_the_fingers() {
+    use akl_tsr::nalgebra::{Translation3, UnitQuaternion};
+    let tcp = Pose::identity();
+    let tilt: f64 = 0.05;
+    let dir = Vector3::new(tilt.cos(), tilt.sin(), 0.0);
+    let under = Vector3::new(0.0, 0.008, 0.0);
+    let centre = under + 0.1 * dir;
+    let pipe = Pose::from_parts(
+        Translation3::from(centre),
+        UnitQuaternion::rotation_between(&Vector3::z(), &dir).unwrap(),
+    );
+    let cylinder = Shape::Cylinder {
+        radius: 0.025,
+        length: 0.3,
+    };
+    let offset = centring_offset(&cylinder, &pipe, &tcp);
+    assert!(
+        (offset - 0.008 * tilt.cos().powi(2)).abs() < 1e-12,
+        "{offset}"
+    );
+    assert!(
+        (centring_offset(&Shape::Sphere { radius: 0.02 }, &pipe, &tcp) - centre.y).abs() < 1e-12
+    );
+}
+
+/// A grasp's closing lasts the fingers' travel to the object, the time they take to push it
+/// from where it lies between them to their midline (at the push share of their speed), and
+/// the settling pause: an off-centre block is given longer than a centred one.
+#[test]
+fn the_closing_waits_for_the_fingers_to_centre_the_object() {
+    let robot = Robot::panda().unwrap();
+    let task = builtin::task("pick_place").unwrap().unwrap();
+    let speed = 0.5 * robot.open_width() / robot.gripper_travel_time();
+    let mut off_centre = 0;
+    for seed in 0..4 {
+        let world = randomize(&task, seed).unwrap();
+        let mut sampled = options(seed);
+        sampled.goals.strategy = crate::goal::GoalStrategy::Sampled;
+        let plan = plan_task(&robot, task.truth.as_ref().unwrap(), &world, &sampled).unwrap();
+        let mut width = robot.open_width();
+        for s in &plan.segments {
+            if s.kind == SegmentKind::Gripper && s.width < width {
+                let event = plan
+                    .events
+                    .iter()
+                    .find(|e| e.action == GripperAction::Close && (e.t - s.start).abs() < 1e-9)
+                    .unwrap();
+                let object = world.object(&event.object).unwrap();
+                let tcp = world.robot_base * robot.tcp_pose(&s.waypoints[0]);
+                let offset = (tcp.inverse() * object.pose).translation.y.abs();
+                let push = offset * (1.0 / PUSH_SHARE - 1.0);
+                let expected = (0.5 * (width - s.width) + push) / speed
+                    + PlanOptions::default().gripper_settle;
+                assert!(
+                    ((s.end - s.start) - expected).abs() < 1e-9,
+                    "{} s, expected {expected} s",
+                    s.end - s.start
+                );
+                off_centre += usize::from(offset > 5e-4);
+            }
+            width = s.width;
+        }
+    }
+    assert!(off_centre > 0, "no grasp off the block's middle");
 }
