@@ -547,7 +547,12 @@ impl Robot {
     /// Seconds the gripper takes to go from fully open to closed (or back): each of the two
     /// fingers travels half the opening at the finger speed.
     pub fn gripper_travel_time(&self) -> f64 {
-        self.open_width() / 2.0 / self.config.gripper.speed
+        self.open_width() / 2.0 / self.finger_speed()
+    }
+
+    /// How fast each finger moves (metres per second).
+    pub fn finger_speed(&self) -> f64 {
+        self.config.gripper.speed
     }
 
     /// Checks a configuration: right length, finite, within the limits; the error names the

@@ -131,9 +131,8 @@ impl Planner<'_> {
         offset: f64,
         allowed: Allowances,
     ) {
-        let speed = 0.5 * self.robot.open_width() / self.robot.gripper_travel_time();
         let travel = (0.5 * (new_width - self.width).abs() + offset * (1.0 / PUSH_SHARE - 1.0))
-            / speed
+            / self.robot.finger_speed()
             / self.options.speed_scale;
         self.width = new_width;
         let q = self.q.clone();

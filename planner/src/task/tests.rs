@@ -325,7 +325,7 @@ fn a_tilted_cylinder_is_centred_where_its_axis_passes_the_fingers() {
 fn the_closing_waits_for_the_fingers_to_centre_the_object() {
     let robot = Robot::panda().unwrap();
     let task = builtin::task("pick_place").unwrap().unwrap();
-    let speed = 0.5 * robot.open_width() / robot.gripper_travel_time();
+    let speed = robot.finger_speed();
     let mut off_centre = 0;
     for seed in 0..4 {
         let world = randomize(&task, seed).unwrap();
