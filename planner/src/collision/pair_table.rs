@@ -316,6 +316,21 @@ mod tests {
             .collect()
     }
 
+    /// The robot's model with its margins, and one whose elements are not grown at all (as
+    /// `akl robot check --margin 0` builds).
+    fn with_and_without_margins(robot: &Robot) -> [RobotCollision; 2] {
+        let bare = Margins {
+            arm: 0.0,
+            hand: 0.0,
+            held: 0.0,
+            self_: 0.0,
+        };
+        [
+            RobotCollision::new(robot),
+            RobotCollision::with_margins(robot, bare),
+        ]
+    }
+
     #[test]
     fn the_panda_tables_its_wrist_pairs_over_joints_6_and_7_only() {
         let robot = Robot::panda().unwrap();
@@ -351,16 +366,7 @@ mod tests {
     #[test]
     fn the_table_is_never_wrong_and_settles_most_wrists() {
         let robot = Robot::panda().unwrap();
-        let bare = Margins {
-            arm: 0.0,
-            hand: 0.0,
-            held: 0.0,
-            self_: 0.0,
-        };
-        for model in [
-            RobotCollision::new(&robot),
-            RobotCollision::with_margins(&robot, bare),
-        ] {
+        for model in with_and_without_margins(&robot) {
             never_wrong_on(&robot, &model);
         }
     }
@@ -370,17 +376,8 @@ mod tests {
     #[test]
     fn an_overlap_is_never_deeper_than_the_penetration() {
         let robot = Robot::panda().unwrap();
-        let bare = Margins {
-            arm: 0.0,
-            hand: 0.0,
-            held: 0.0,
-            self_: 0.0,
-        };
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        for model in [
-            RobotCollision::new(&robot),
-            RobotCollision::with_margins(&robot, bare),
-        ] {
+        for model in with_and_without_margins(&robot) {
             let mut overlaps = 0;
             for (t, a, b) in tabled(&model) {
                 for _ in 0..2000 {
