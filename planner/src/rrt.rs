@@ -4,7 +4,8 @@
 //! Two refinements, each an option: a dynamic domain (Yershova, Jaillet, Siméon and LaValle,
 //! ICRA 2005), which stops sampling far from the nodes next to obstacles, so that a tree in
 //! a narrow space is not pulled against its walls by samples it can never reach; and balanced
-//! trees, which always grow the smaller one.
+//! trees, which always grow the smaller one. Edges are screened by plain checks before
+//! they are proved free, as many as the share of blocked edges so far makes worth it.
 
 use crate::space::{distance, Space};
 use rand::Rng;
@@ -135,6 +136,38 @@ impl Tree {
     }
 }
 
+/// How many plain checks an edge gets before its proof, from how often the edges tried so
+/// far were blocked: screening (see [`Space::screened_edge_valid`]) pays where most edges
+/// are blocked and is overhead where most are free.
+#[derive(Debug, Default)]
+struct Screening {
+    tried: u32,
+    blocked: u32,
+}
+
+/// Screening points per radian of an edge's length when every edge is blocked, and at most.
+/// Chosen by measurement (BENCHMARKS.md, "Screening edges").
+const SCREEN_PER_RADIAN: f64 = 8.0;
+const SCREEN_MAX: usize = 8;
+
+impl Screening {
+    /// Points to screen on an edge `length` long: `SCREEN_PER_RADIAN` per radian times the
+    /// share of edges blocked so far (a half to begin with), at most `SCREEN_MAX`.
+    fn points(&self, length: f64) -> usize {
+        let rate = (f64::from(self.blocked) + 0.5) / (f64::from(self.tried) + 1.0);
+        ((length * SCREEN_PER_RADIAN * rate) as usize).min(SCREEN_MAX)
+    }
+
+    /// Whether the edge from `a` to `b` is free, screened as the record so far says, and
+    /// adding it to the record.
+    fn edge_valid(&mut self, space: &Space, a: &[f64], b: &[f64]) -> bool {
+        let valid = space.screened_edge_valid(a, b, self.points(distance(a, b)));
+        self.tried += 1;
+        self.blocked += u32::from(!valid);
+        valid
+    }
+}
+
 enum Extend {
     Reached(usize),
     Advanced(usize),
@@ -149,6 +182,7 @@ fn extend(
     tree: &mut Tree,
     target: &[f64],
     space: &Space,
+    screening: &mut Screening,
     range: f64,
     domain: Option<&DynamicDomain>,
 ) -> Extend {
@@ -170,7 +204,7 @@ fn extend(
             false,
         )
     };
-    if !space.edge_valid(&from, &to) {
+    if !screening.edge_valid(space, &from, &to) {
         if let Some(dd) = domain {
             let r = &mut tree.radii[near];
             *r = if r.is_finite() {
@@ -196,9 +230,15 @@ fn extend(
 }
 
 /// Extends `tree` towards `target` until it reaches it or is blocked.
-fn connect(tree: &mut Tree, target: &[f64], space: &Space, range: f64) -> Extend {
+fn connect(
+    tree: &mut Tree,
+    target: &[f64],
+    space: &Space,
+    screening: &mut Screening,
+    range: f64,
+) -> Extend {
     loop {
-        match extend(tree, target, space, range, None) {
+        match extend(tree, target, space, screening, range, None) {
             Extend::Advanced(_) => continue,
             other => return other,
         }
@@ -257,14 +297,22 @@ pub fn rrt_connect<R: Rng + ?Sized>(
     // `a_is_start` tracks which tree grows from the start after the swaps.
     let mut a_is_start = true;
     let mut sample = vec![0.0; dof];
+    let mut screening = Screening::default();
     for iteration in 1..=options.max_iterations {
         space.sample(rng, &mut sample);
         let domain = options.dynamic_domain.as_ref();
-        if let Extend::Advanced(new) | Extend::Reached(new) =
-            extend(&mut a, &sample, space, options.range, domain)
-        {
+        if let Extend::Advanced(new) | Extend::Reached(new) = extend(
+            &mut a,
+            &sample,
+            space,
+            &mut screening,
+            options.range,
+            domain,
+        ) {
             let q_new = a.node(new).to_vec();
-            if let Extend::Reached(other) = connect(&mut b, &q_new, space, options.range) {
+            if let Extend::Reached(other) =
+                connect(&mut b, &q_new, space, &mut screening, options.range)
+            {
                 let (start_tree, start_node, goal_tree, goal_node) = if a_is_start {
                     (&a, new, &b, other)
                 } else {
@@ -348,12 +396,26 @@ mod tests {
         let mut blocked = ready.clone();
         blocked[0] += 1.2;
         assert!(matches!(
-            extend(&mut tree, &blocked, &space, 2.0, Some(&domain)),
+            extend(
+                &mut tree,
+                &blocked,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                Some(&domain)
+            ),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.5);
         assert!(matches!(
-            extend(&mut tree, &blocked, &space, 2.0, Some(&domain)),
+            extend(
+                &mut tree,
+                &blocked,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                Some(&domain)
+            ),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.125);
@@ -361,7 +423,14 @@ mod tests {
         let mut blocked_nearer = ready.clone();
         blocked_nearer[0] += 1.1;
         assert!(matches!(
-            extend(&mut tree, &blocked_nearer, &space, 2.0, Some(&domain)),
+            extend(
+                &mut tree,
+                &blocked_nearer,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                Some(&domain)
+            ),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.0);
@@ -369,7 +438,14 @@ mod tests {
         let mut far = ready.clone();
         far[0] -= 1.1;
         assert!(matches!(
-            extend(&mut tree, &far, &space, 2.0, Some(&domain)),
+            extend(
+                &mut tree,
+                &far,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                Some(&domain)
+            ),
             Extend::Outside
         ));
         assert_eq!(tree.len(), 1);
@@ -377,16 +453,45 @@ mod tests {
         let mut near = ready.clone();
         near[0] -= 0.5;
         assert!(matches!(
-            extend(&mut tree, &near, &space, 2.0, Some(&domain)),
+            extend(
+                &mut tree,
+                &near,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                Some(&domain)
+            ),
             Extend::Reached(1)
         ));
         assert_eq!(tree.radii[0], 1.25);
         assert!(tree.radii[1].is_infinite());
         // Without a domain nothing is turned away.
         assert!(matches!(
-            extend(&mut tree, &far, &space, 2.0, None),
+            extend(
+                &mut tree,
+                &far,
+                &space,
+                &mut Screening::default(),
+                2.0,
+                None
+            ),
             Extend::Reached(2) | Extend::Advanced(2)
         ));
+    }
+
+    /// Screening starts at half its points per radian, follows the share of blocked edges,
+    /// and stops for a search whose edges are free.
+    #[test]
+    fn screening_follows_the_share_of_blocked_edges() {
+        let mut screening = Screening::default();
+        assert_eq!(screening.points(1.0), 4);
+        screening.tried = 99;
+        screening.blocked = 99;
+        assert_eq!(screening.points(1.0), 7);
+        assert_eq!(screening.points(2.0), SCREEN_MAX);
+        assert_eq!(screening.points(0.1), 0);
+        screening.blocked = 0;
+        assert_eq!(screening.points(1.0), 0);
     }
 
     /// Every path RRT-Connect returns between random collision-free configurations, as found

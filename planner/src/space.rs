@@ -44,6 +44,15 @@ impl Space<'_> {
         self.edge(a, b).is_none()
     }
 
+    /// Whether the straight edge from `a` to `b` is collision-free, after plain checks at
+    /// `points` of its points (see [`Checker::screen`]) that reject it if any collides.
+    pub(crate) fn screened_edge_valid(&self, a: &[f64], b: &[f64], points: usize) -> bool {
+        self.checker
+            .screen(a, b, self.width, self.held, self.allow, points)
+            .is_none()
+            && self.edge_valid(a, b)
+    }
+
     /// A configuration drawn uniformly within the joint limits.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
         for (v, [lo, hi]) in out.iter_mut().zip(self.checker.robot().joint_limits()) {

@@ -454,6 +454,7 @@ impl<'a> Checker<'a> {
         if !self.within_limits(a) || !self.within_limits(b) {
             return Some(Hit::Limits);
         }
+
         let mut sweep = Sweep::new(self.model, a.len());
         for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
             *h = (y - x).abs();
@@ -490,6 +491,44 @@ impl<'a> Checker<'a> {
         }
         None
     }
+
+    /// The first collision at `points` points of the edge from `a` to `b`, taken in
+    /// bisection order from `b` (1, 1/2, 1/4, 3/4, 1/8, ...), by plain checks. A proof's
+    /// checks measure clearances and stop only where one is negative; a blocked edge often
+    /// shows its collision at one of these points, found at a fraction of the cost.
+    pub(crate) fn screen(
+        &self,
+        a: &[f64],
+        b: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+        points: usize,
+    ) -> Option<Hit> {
+        let mut q = vec![0.0; a.len()];
+        for k in 0..points {
+            let t = bisection_point(k);
+            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(b)) {
+                *v = x + t * (y - x);
+            }
+            // Within the joint limits: the ends are, and the limits are a box.
+            if let Err(hit) = self.probe::<false>(&q, width, held, allow, None) {
+                return Some(hit);
+            }
+        }
+        None
+    }
+}
+
+/// The `k`-th point of a unit interval in bisection order: 1, then 1/2, 1/4, 3/4, 1/8,
+/// 3/8, 5/8, 7/8, 1/16, ...
+fn bisection_point(k: usize) -> f64 {
+    if k == 0 {
+        return 1.0;
+    }
+    let level = k.ilog2();
+    let odd = 2 * (k - (1 << level)) + 1;
+    odd as f64 / f64::from(1u32 << (level + 1))
 }
 
 /// A clearance between an element and an object that its balls bound from below by `gap`,
@@ -550,5 +589,19 @@ pub(super) fn clear_of(
             pr.limit(moved, slack);
             !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose)
         }
+    }
+}
+
+#[cfg(test)]
+mod bisection_tests {
+    use super::bisection_point;
+
+    #[test]
+    fn points_come_in_bisection_order_from_the_far_end() {
+        let points: Vec<f64> = (0..9).map(bisection_point).collect();
+        assert_eq!(
+            points,
+            [1.0, 0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875, 0.0625]
+        );
     }
 }

@@ -232,6 +232,45 @@ mod checks {
         assert_eq!(checker.check(&q, 0.05, Some(&held), &allow), None);
     }
 
+    /// Screening finds a post in the way of an edge whose ends are free, at the edge's
+    /// middle (its second point), and reports what hit it; with only the end screened it
+    /// finds nothing, and the proof alone finds the post too.
+    #[test]
+    fn screening_finds_a_collision_inside_an_edge_whose_ends_are_free() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut a = robot.ready().to_vec();
+        let mut b = a.clone();
+        a[0] -= 0.6;
+        b[0] += 0.6;
+        let tcp = robot.tcp_pose(robot.ready()).translation.vector;
+        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+        world.objects.push(akl_scene::Object {
+            name: "post".into(),
+            shape: akl_scene::Shape::Box {
+                size: [0.03, 0.03, 0.3],
+            },
+            pose: akl_tsr::pose::pose_from_xyz([tcp.x, tcp.y, tcp.z]),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        assert_eq!(checker.check(&a, 0.08, None, &none()), None);
+        assert_eq!(checker.check(&b, 0.08, None, &none()), None);
+        assert_eq!(checker.screen(&a, &b, 0.08, None, &none(), 1), None);
+        for hit in [
+            checker.screen(&a, &b, 0.08, None, &none(), 2),
+            checker.edge(&a, &b, 0.08, None, &none()),
+        ] {
+            match hit {
+                Some(Hit::World(_, object)) => assert_eq!(object, "post"),
+                other => panic!("expected the post, got {other:?}"),
+            }
+        }
+    }
+
     fn arb_q() -> impl Strategy<Value = Vec<f64>> {
         let robot = Robot::panda().unwrap();
         robot
