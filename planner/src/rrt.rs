@@ -146,16 +146,19 @@ struct Screening {
 }
 
 /// Screening points per radian of an edge's length when every edge is blocked, and at most.
-/// Chosen by measurement (BENCHMARKS.md, "Screening edges").
+/// Chosen, with screening starting once half the edges are blocked, by measurement
+/// (BENCHMARKS.md, "Screening edges").
 const SCREEN_PER_RADIAN: f64 = 8.0;
 const SCREEN_MAX: usize = 8;
 
 impl Screening {
-    /// Points to screen on an edge `length` long: `SCREEN_PER_RADIAN` per radian times the
-    /// share of edges blocked so far (a half to begin with), at most `SCREEN_MAX`.
+    /// Points to screen on an edge `length` long: none while at most half the edges tried so
+    /// far were blocked (a half to begin with), rising to `SCREEN_PER_RADIAN` per radian as
+    /// all are; at most `SCREEN_MAX`.
     fn points(&self, length: f64) -> usize {
         let rate = (f64::from(self.blocked) + 0.5) / (f64::from(self.tried) + 1.0);
-        ((length * SCREEN_PER_RADIAN * rate) as usize).min(SCREEN_MAX)
+        let share = (2.0 * rate - 1.0).max(0.0);
+        ((length * SCREEN_PER_RADIAN * share) as usize).min(SCREEN_MAX)
     }
 
     /// Whether the edge from `a` to `b` is free, screened as the record so far says, and
@@ -479,13 +482,15 @@ mod tests {
         ));
     }
 
-    /// Screening starts at half its points per radian, follows the share of blocked edges,
-    /// and stops for a search whose edges are free.
+    /// Screening waits until more than half the edges tried are blocked, then follows their
+    /// share, and stops for a search whose edges are free.
     #[test]
     fn screening_follows_the_share_of_blocked_edges() {
         let mut screening = Screening::default();
-        assert_eq!(screening.points(1.0), 4);
+        assert_eq!(screening.points(1.0), 0);
         screening.tried = 99;
+        screening.blocked = 75;
+        assert_eq!(screening.points(1.0), 4);
         screening.blocked = 99;
         assert_eq!(screening.points(1.0), 7);
         assert_eq!(screening.points(2.0), SCREEN_MAX);
