@@ -395,6 +395,7 @@ mod tests {
         let ready = robot.ready().to_vec();
         let mut tree = Tree::new(robot.dof());
         tree.add(&ready, NO_PARENT);
+        let mut screening = Screening::default();
         // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
         let mut blocked = ready.clone();
         blocked[0] += 1.2;
@@ -403,7 +404,7 @@ mod tests {
                 &mut tree,
                 &blocked,
                 &space,
-                &mut Screening::default(),
+                &mut screening,
                 2.0,
                 Some(&domain)
             ),
@@ -415,7 +416,7 @@ mod tests {
                 &mut tree,
                 &blocked,
                 &space,
-                &mut Screening::default(),
+                &mut screening,
                 2.0,
                 Some(&domain)
             ),
@@ -430,7 +431,7 @@ mod tests {
                 &mut tree,
                 &blocked_nearer,
                 &space,
-                &mut Screening::default(),
+                &mut screening,
                 2.0,
                 Some(&domain)
             ),
@@ -441,14 +442,7 @@ mod tests {
         let mut far = ready.clone();
         far[0] -= 1.1;
         assert!(matches!(
-            extend(
-                &mut tree,
-                &far,
-                &space,
-                &mut Screening::default(),
-                2.0,
-                Some(&domain)
-            ),
+            extend(&mut tree, &far, &space, &mut screening, 2.0, Some(&domain)),
             Extend::Outside
         ));
         assert_eq!(tree.len(), 1);
@@ -456,28 +450,14 @@ mod tests {
         let mut near = ready.clone();
         near[0] -= 0.5;
         assert!(matches!(
-            extend(
-                &mut tree,
-                &near,
-                &space,
-                &mut Screening::default(),
-                2.0,
-                Some(&domain)
-            ),
+            extend(&mut tree, &near, &space, &mut screening, 2.0, Some(&domain)),
             Extend::Reached(1)
         ));
         assert_eq!(tree.radii[0], 1.25);
         assert!(tree.radii[1].is_infinite());
         // Without a domain nothing is turned away.
         assert!(matches!(
-            extend(
-                &mut tree,
-                &far,
-                &space,
-                &mut Screening::default(),
-                2.0,
-                None
-            ),
+            extend(&mut tree, &far, &space, &mut screening, 2.0, None),
             Extend::Reached(2) | Extend::Advanced(2)
         ));
     }

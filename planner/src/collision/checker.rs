@@ -454,7 +454,6 @@ impl<'a> Checker<'a> {
         if !self.within_limits(a) || !self.within_limits(b) {
             return Some(Hit::Limits);
         }
-
         let mut sweep = Sweep::new(self.model, a.len());
         for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
             *h = (y - x).abs();
@@ -505,6 +504,9 @@ impl<'a> Checker<'a> {
         allow: &Allowances,
         points: usize,
     ) -> Option<Hit> {
+        if points > 0 && (!self.within_limits(a) || !self.within_limits(b)) {
+            return Some(Hit::Limits);
+        }
         let mut q = vec![0.0; a.len()];
         for k in 0..points {
             let t = bisection_point(k);

@@ -234,7 +234,8 @@ mod checks {
 
     /// Screening finds a post in the way of an edge whose ends are free, at the edge's
     /// middle (its second point), and reports what hit it; with only the end screened it
-    /// finds nothing, and the proof alone finds the post too.
+    /// finds nothing, and the proof alone finds the post too. An end beyond the joint limits
+    /// is reported as such.
     #[test]
     fn screening_finds_a_collision_inside_an_edge_whose_ends_are_free() {
         let robot = Robot::panda().unwrap();
@@ -260,6 +261,12 @@ mod checks {
         assert_eq!(checker.check(&a, 0.08, None, &none()), None);
         assert_eq!(checker.check(&b, 0.08, None, &none()), None);
         assert_eq!(checker.screen(&a, &b, 0.08, None, &none(), 1), None);
+        let mut beyond = b.clone();
+        beyond[0] = robot.joint_limits()[0][1] + 0.1;
+        assert_eq!(
+            checker.screen(&a, &beyond, 0.08, None, &none(), 1),
+            Some(Hit::Limits)
+        );
         for hit in [
             checker.screen(&a, &b, 0.08, None, &none(), 2),
             checker.edge(&a, &b, 0.08, None, &none()),
