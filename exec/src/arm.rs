@@ -219,7 +219,8 @@ pub(crate) struct SimArm {
     accel_limits: Vec<f64>,
     velocity_limits: Vec<f64>,
     joint_limits: Vec<[f64; 2]>,
-    finger_speed: f64,
+    /// How fast the opening changes (m/s): each finger moves at half this.
+    opening_rate: f64,
     closed: bool,
     open_width: f64,
     gains: (f64, f64),
@@ -231,7 +232,7 @@ impl SimArm {
     /// Moves the fingers at `scale` (in (0, 1]) of the gripper's speed, as a plan timed with
     /// that speed scale expects ([`akl_planner::PlanOptions::speed_scale`]).
     pub(crate) fn scale_finger_speed(&mut self, scale: f64) {
-        self.finger_speed *= scale;
+        self.opening_rate *= scale;
     }
 
     /// Adds `robot`, its base at `base`, to `sim` at configuration `q` with the fingers opened
@@ -265,7 +266,7 @@ impl SimArm {
             accel_limits,
             velocity_limits: robot.velocity_limits().to_vec(),
             joint_limits: robot.joint_limits().to_vec(),
-            finger_speed: robot.open_width() / robot.gripper_travel_time().max(1e-6),
+            opening_rate: 2.0 * robot.finger_speed(),
             closed: false,
             open_width: robot.open_width(),
             gains: (w * w, 2.0 * drives.damping_ratio * w),
@@ -378,7 +379,7 @@ impl SimArm {
             }
         }
         // Each pad moves half the change of the opening.
-        let pad_step = 0.5 * self.finger_speed * dt;
+        let pad_step = 0.5 * self.opening_rate * dt;
         let closing = closing_step(pads, pad_step);
         self.closed = false;
         self.width = match self.finger {
