@@ -291,6 +291,40 @@ mod tests {
         )
     }
 
+    /// A placement's hull (rounded by its border), the vertex it picked, and the pose of a box
+    /// whose middle lies `reach` plus the border and the gap beyond that vertex, a face towards
+    /// it or turned; `None` where the drawn direction is too short to use.
+    fn hull_and_box(placement: &Placement, reach: f64) -> Option<(SharedShape, V, Pose)> {
+        let (points, border, pick, direction, gap, turn) = placement;
+        let points: Vec<V> = points.iter().map(|p| V::new(p[0], p[1], p[2])).collect();
+        let plain = SharedShape::convex_hull(&points).unwrap();
+        let vertices = plain.as_convex_polyhedron().unwrap().points();
+        let vertex = vertices[pick % vertices.len()];
+        let hull = if *border > 0.0 {
+            SharedShape::round_convex_hull(&points, *border).unwrap()
+        } else {
+            plain.clone()
+        };
+        let mut away = V::new(direction[0], direction[1], direction[2]).normalize_or_zero();
+        if away.length() <= 0.5 {
+            return None;
+        }
+        if away.dot(vertex) < 0.0 {
+            away = -away;
+        }
+        let centre = vertex + away * (reach + border + gap);
+        let rotation = match turn {
+            None => UnitQuaternion::rotation_between(
+                &Vector3::z(),
+                &-Vector3::new(away.x, away.y, away.z),
+            )
+            .unwrap_or_else(UnitQuaternion::identity),
+            Some(t) => UnitQuaternion::from_scaled_axis(Vector3::new(t[0], t[1], t[2])),
+        };
+        let at = Pose::from_parts(Translation3::new(centre.x, centre.y, centre.z), rotation);
+        Some((hull, vertex, at))
+    }
+
     /// Between rounded shapes of every kind the planner builds (grown hulls, boxes and
     /// cylinders, capsules, and plain boxes), the distance taken between their cores less
     /// their radii is never above parry's own on the rounded shapes, and within 50 µm of it
@@ -411,27 +445,9 @@ mod tests {
         ) {
             let gap: f64 = gap - push;
             prop_assume!(gap.abs() > 1e-5);
-            let points: Vec<V> = points.iter().map(|p| V::new(p[0], p[1], p[2])).collect();
-            let plain = SharedShape::convex_hull(&points).unwrap();
-            let vertices = plain.as_convex_polyhedron().unwrap().points();
-            let hull = if border > 0.0 {
-                SharedShape::round_convex_hull(&points, border).unwrap()
-            } else {
-                plain.clone()
-            };
-            let vertex = vertices[pick % vertices.len()];
-            let mut away = V::new(direction[0], direction[1], direction[2]).normalize_or_zero();
-            prop_assume!(away.length() > 0.5);
-            if away.dot(vertex) < 0.0 {
-                away = -away;
-            }
-            let centre = vertex + away * (0.05 + rounding + border + gap);
-            let rotation = match turn {
-                None => UnitQuaternion::rotation_between(&Vector3::z(), &-Vector3::new(away.x, away.y, away.z))
-                    .unwrap_or_else(UnitQuaternion::identity),
-                Some(t) => UnitQuaternion::from_scaled_axis(Vector3::new(t[0], t[1], t[2])),
-            };
-            let box_pose = Pose::from_parts(Translation3::new(centre.x, centre.y, centre.z), rotation);
+            let placed = hull_and_box(&(points, border, pick, direction, gap, turn), 0.05 + rounding);
+            prop_assume!(placed.is_some());
+            let (hull, _, box_pose) = placed.unwrap();
             let cube = if rounding > 0.0 {
                 SharedShape::round_cuboid(0.05, 0.05, 0.05, rounding)
             } else {
@@ -461,30 +477,13 @@ mod tests {
         /// rounded hulls, so 5,000 cases catch a return to either.
         #[test]
         fn the_distance_never_exceeds_a_vertex_distance(
-            (points, border, pick, direction, gap, turn) in near_a_vertex(),
+            placement in near_a_vertex(),
             reach in 0.0..0.03,
         ) {
-            let points: Vec<V> = points.iter().map(|p| V::new(p[0], p[1], p[2])).collect();
-            let plain = SharedShape::convex_hull(&points).unwrap();
-            let vertices = plain.as_convex_polyhedron().unwrap().points();
-            let hull = if border > 0.0 {
-                SharedShape::round_convex_hull(&points, border).unwrap()
-            } else {
-                plain.clone()
-            };
-            let vertex = vertices[pick % vertices.len()];
-            let mut away = V::new(direction[0], direction[1], direction[2]).normalize_or_zero();
-            prop_assume!(away.length() > 0.5);
-            if away.dot(vertex) < 0.0 {
-                away = -away;
-            }
-            let centre = vertex + away * (0.09 + border + gap);
-            let rotation = match turn {
-                None => UnitQuaternion::rotation_between(&Vector3::z(), &-Vector3::new(away.x, away.y, away.z))
-                    .unwrap_or_else(UnitQuaternion::identity),
-                Some(t) => UnitQuaternion::from_scaled_axis(Vector3::new(t[0], t[1], t[2])),
-            };
-            let box_pose = Pose::from_parts(Translation3::new(centre.x, centre.y, centre.z), rotation);
+            let border = placement.1;
+            let placed = hull_and_box(&placement, 0.09);
+            prop_assume!(placed.is_some());
+            let (hull, vertex, box_pose) = placed.unwrap();
             let cube = SharedShape::cuboid(0.05, 0.05, 0.05);
             let here = Pose::identity();
             let d = distance(&hull, &here, &cube, &box_pose).unwrap();

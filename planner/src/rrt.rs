@@ -396,30 +396,19 @@ mod tests {
         let mut tree = Tree::new(robot.dof());
         tree.add(&ready, NO_PARENT);
         let mut screening = Screening::default();
+        let mut step = |tree: &mut Tree, target: &[f64], domain: Option<&DynamicDomain>| {
+            extend(tree, target, &space, &mut screening, 2.0, domain)
+        };
         // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
         let mut blocked = ready.clone();
         blocked[0] += 1.2;
         assert!(matches!(
-            extend(
-                &mut tree,
-                &blocked,
-                &space,
-                &mut screening,
-                2.0,
-                Some(&domain)
-            ),
+            step(&mut tree, &blocked, Some(&domain)),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.5);
         assert!(matches!(
-            extend(
-                &mut tree,
-                &blocked,
-                &space,
-                &mut screening,
-                2.0,
-                Some(&domain)
-            ),
+            step(&mut tree, &blocked, Some(&domain)),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.125);
@@ -427,14 +416,7 @@ mod tests {
         let mut blocked_nearer = ready.clone();
         blocked_nearer[0] += 1.1;
         assert!(matches!(
-            extend(
-                &mut tree,
-                &blocked_nearer,
-                &space,
-                &mut screening,
-                2.0,
-                Some(&domain)
-            ),
+            step(&mut tree, &blocked_nearer, Some(&domain)),
             Extend::Trapped
         ));
         assert_eq!(tree.radii[0], 1.0);
@@ -442,7 +424,7 @@ mod tests {
         let mut far = ready.clone();
         far[0] -= 1.1;
         assert!(matches!(
-            extend(&mut tree, &far, &space, &mut screening, 2.0, Some(&domain)),
+            step(&mut tree, &far, Some(&domain)),
             Extend::Outside
         ));
         assert_eq!(tree.len(), 1);
@@ -450,14 +432,14 @@ mod tests {
         let mut near = ready.clone();
         near[0] -= 0.5;
         assert!(matches!(
-            extend(&mut tree, &near, &space, &mut screening, 2.0, Some(&domain)),
+            step(&mut tree, &near, Some(&domain)),
             Extend::Reached(1)
         ));
         assert_eq!(tree.radii[0], 1.25);
         assert!(tree.radii[1].is_infinite());
         // Without a domain nothing is turned away.
         assert!(matches!(
-            extend(&mut tree, &far, &space, &mut screening, 2.0, None),
+            step(&mut tree, &far, None),
             Extend::Reached(2) | Extend::Advanced(2)
         ));
     }
