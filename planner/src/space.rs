@@ -45,12 +45,11 @@ impl Space<'_> {
     }
 
     /// Whether the straight edge from `a` to `b` is collision-free, after plain checks at
-    /// `points` of its points (see [`Checker::screen`]) that reject it if any collides.
+    /// `points` of its points (see [`Checker::screened_edge`]) that reject it if any collides.
     pub(crate) fn screened_edge_valid(&self, a: &[f64], b: &[f64], points: usize) -> bool {
         self.checker
-            .screen(a, b, self.width, self.held, self.allow, points)
+            .screened_edge(a, b, self.width, self.held, self.allow, points)
             .is_none()
-            && self.edge_valid(a, b)
     }
 
     /// A configuration drawn uniformly within the joint limits.

@@ -451,8 +451,25 @@ impl<'a> Checker<'a> {
         held: Option<&Held>,
         allow: &Allowances,
     ) -> Option<Hit> {
+        self.screened_edge(a, b, width, held, allow, 0)
+    }
+
+    /// [`Checker::edge`], after plain checks at `points` points of the edge
+    /// ([`Checker::screen`]): a collision there rejects the edge before any proof.
+    pub(crate) fn screened_edge(
+        &self,
+        a: &[f64],
+        b: &[f64],
+        width: f64,
+        held: Option<&Held>,
+        allow: &Allowances,
+        points: usize,
+    ) -> Option<Hit> {
         if !self.within_limits(a) || !self.within_limits(b) {
             return Some(Hit::Limits);
+        }
+        if let Some(hit) = self.screen(a, b, width, held, allow, points) {
+            return Some(hit);
         }
         let mut sweep = Sweep::new(self.model, a.len());
         for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
@@ -494,8 +511,9 @@ impl<'a> Checker<'a> {
     /// The first collision at `points` points of the edge from `a` to `b`, taken in
     /// bisection order from `b` (1, 1/2, 1/4, 3/4, 1/8, ...), by plain checks. A proof's
     /// checks measure clearances and stop only where one is negative; a blocked edge often
-    /// shows its collision at one of these points, found at a fraction of the cost.
-    pub(crate) fn screen(
+    /// shows its collision at one of these points, found at a fraction of the cost. Both ends
+    /// must be within the joint limits ([`Checker::screened_edge`] checks them).
+    pub(super) fn screen(
         &self,
         a: &[f64],
         b: &[f64],
@@ -504,8 +522,8 @@ impl<'a> Checker<'a> {
         allow: &Allowances,
         points: usize,
     ) -> Option<Hit> {
-        if points > 0 && (!self.within_limits(a) || !self.within_limits(b)) {
-            return Some(Hit::Limits);
+        if points == 0 {
+            return None;
         }
         let mut q = vec![0.0; a.len()];
         for k in 0..points {

@@ -264,7 +264,7 @@ mod checks {
         let mut beyond = b.clone();
         beyond[0] = robot.joint_limits()[0][1] + 0.1;
         assert_eq!(
-            checker.screen(&a, &beyond, 0.08, None, &none(), 1),
+            checker.screened_edge(&a, &beyond, 0.08, None, &none(), 1),
             Some(Hit::Limits)
         );
         for hit in [
