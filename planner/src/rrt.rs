@@ -4,8 +4,11 @@
 //! Two refinements, each an option: a dynamic domain (Yershova, Jaillet, Siméon and LaValle,
 //! ICRA 2005), which stops sampling far from the nodes next to obstacles, so that a tree in
 //! a narrow space is not pulled against its walls by samples it can never reach; and balanced
-//! trees, which always grow the smaller one. Edges are screened by plain checks before
-//! they are proved free, as many as the share of blocked edges so far makes worth it.
+//! trees, which always grow the smaller one. A node from which extensions keep failing
+//! takes shorter steps, so that a tree started in a pocket (a goal between a grasped can
+//! and a shelf's wall) creeps out of it instead of trying one long step after another.
+//! Edges are screened by plain checks before they are proved free, as many as the share of
+//! blocked edges so far makes worth it.
 
 use crate::space::{distance, Space};
 use rand::Rng;
@@ -23,7 +26,19 @@ pub struct RrtOptions {
     /// Whether the smaller tree is always the one extended toward the sample (otherwise the
     /// trees take turns).
     pub balance: bool,
+    /// Failed extensions toward samples from one node over which that node's step halves
+    /// (smoothly, down to [`MIN_STEP`]); `None` keeps every step at `range`.
+    pub halve_step_after: Option<u32>,
 }
+
+/// The shortest step a node's failures shrink it to (radians): short enough to creep along
+/// a passage a few millimetres wide, long enough that a step moves the arm.
+pub const MIN_STEP: f64 = 0.05;
+
+/// The default of [`RrtOptions::halve_step_after`], chosen by measurement (BENCHMARKS.md,
+/// "Steps that shrink in pockets"): fewer failures shrank the steps of nodes that only had
+/// to wait for one long lucky step, more left tight pockets unsolved within the budget.
+pub const HALVE_STEP_AFTER: u32 = 1000;
 
 /// The dynamic domain's settings: a node whose extension hit an obstacle gets a finite
 /// radius (`radius`, radians), which each success from it widens by a factor `1 + alpha` and
@@ -57,6 +72,7 @@ impl Default for RrtOptions {
             max_iterations: 20_000,
             dynamic_domain: Some(DynamicDomain::default()),
             balance: true,
+            halve_step_after: Some(HALVE_STEP_AFTER),
         }
     }
 }
@@ -70,6 +86,8 @@ struct Tree {
     roots: Vec<usize>,
     /// Each node's dynamic-domain radius (infinite until an extension from it fails).
     radii: Vec<f64>,
+    /// How many extensions toward samples from each node failed.
+    failures: Vec<u32>,
 }
 
 const NO_PARENT: usize = usize::MAX;
@@ -82,6 +100,7 @@ impl Tree {
             parents: Vec::new(),
             roots: Vec::new(),
             radii: Vec::new(),
+            failures: Vec::new(),
         }
     }
 
@@ -98,12 +117,25 @@ impl Tree {
         self.nodes.extend_from_slice(q);
         self.parents.push(parent);
         self.radii.push(f64::INFINITY);
+        self.failures.push(0);
         self.roots.push(if parent == NO_PARENT {
             i
         } else {
             self.roots[parent]
         });
         i
+    }
+
+    /// The step of an extension from node `i`: `range`, halved for every `halve_after`
+    /// failures from it so far (smoothly), but not below [`MIN_STEP`].
+    fn step(&self, i: usize, range: f64, halve_after: Option<u32>) -> f64 {
+        match halve_after {
+            Some(n) if self.failures[i] > 0 => {
+                let halvings = f64::from(self.failures[i]) / f64::from(n.max(1));
+                (range * (-halvings).exp2()).max(MIN_STEP.min(range))
+            }
+            _ => range,
+        }
     }
 
     fn nearest(&self, q: &[f64]) -> usize {
@@ -180,7 +212,8 @@ enum Extend {
 }
 
 /// Extends `tree` one step of at most `range` towards `target`, within the nodes' dynamic
-/// domains if `domain` is given (and updating them).
+/// domains if `domain` is given (and updating them), the step shrinking with the node's
+/// failures if `halve_after` is given (and counting them).
 fn extend(
     tree: &mut Tree,
     target: &[f64],
@@ -188,6 +221,7 @@ fn extend(
     screening: &mut Screening,
     range: f64,
     domain: Option<&DynamicDomain>,
+    halve_after: Option<u32>,
 ) -> Extend {
     let near = tree.nearest(target);
     let from = tree.node(near).to_vec();
@@ -195,6 +229,7 @@ fn extend(
     if domain.is_some() && d > tree.radii[near] {
         return Extend::Outside;
     }
+    let range = tree.step(near, range, halve_after);
     let (to, reached) = if d <= range {
         (target.to_vec(), true)
     } else {
@@ -208,6 +243,9 @@ fn extend(
         )
     };
     if !screening.edge_valid(space, &from, &to) {
+        if halve_after.is_some() {
+            tree.failures[near] = tree.failures[near].saturating_add(1);
+        }
         if let Some(dd) = domain {
             let r = &mut tree.radii[near];
             *r = if r.is_finite() {
@@ -241,7 +279,7 @@ fn connect(
     range: f64,
 ) -> Extend {
     loop {
-        match extend(tree, target, space, screening, range, None) {
+        match extend(tree, target, space, screening, range, None, None) {
             Extend::Advanced(_) => continue,
             other => return other,
         }
@@ -311,6 +349,7 @@ pub fn rrt_connect<R: Rng + ?Sized>(
             &mut screening,
             options.range,
             domain,
+            options.halve_step_after,
         ) {
             let q_new = a.node(new).to_vec();
             if let Extend::Reached(other) =
@@ -397,7 +436,7 @@ mod tests {
         tree.add(&ready, NO_PARENT);
         let mut screening = Screening::default();
         let mut step = |tree: &mut Tree, target: &[f64], domain: Option<&DynamicDomain>| {
-            extend(tree, target, &space, &mut screening, 2.0, domain)
+            extend(tree, target, &space, &mut screening, 2.0, domain, None)
         };
         // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
         let mut blocked = ready.clone();
@@ -442,6 +481,80 @@ mod tests {
             step(&mut tree, &far, None),
             Extend::Reached(2) | Extend::Advanced(2)
         ));
+    }
+
+    /// Extensions from a node that meet an obstacle shrink that node's later steps: after
+    /// `halve_after` failures a step is half the range, never below the least step, and a
+    /// new node starts with the whole range.
+    #[test]
+    fn failures_shrink_a_nodes_step() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+        world.objects.push(Object {
+            name: "wall".into(),
+            shape: Shape::Box {
+                size: [0.4, 0.02, 0.7],
+            },
+            pose: pose_from_xyz([0.4, 0.2, 0.55]),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let allow = Allowances::default();
+        let space = Space {
+            checker: &checker,
+            width: robot.open_width(),
+            held: None,
+            allow: &allow,
+        };
+        let ready = robot.ready().to_vec();
+        // Turning joint 1 by 1.2 rad sweeps the arm through the wall; the other way is free.
+        let mut blocked = ready.clone();
+        blocked[0] += 1.2;
+        let mut free = ready.clone();
+        free[0] -= 1.5;
+        let grow = |halve_after: Option<u32>| {
+            let mut tree = Tree::new(robot.dof());
+            tree.add(&ready, NO_PARENT);
+            let mut screening = Screening::default();
+            for _ in 0..2 {
+                let blocked_step = extend(
+                    &mut tree,
+                    &blocked,
+                    &space,
+                    &mut screening,
+                    2.0,
+                    None,
+                    halve_after,
+                );
+                assert!(matches!(blocked_step, Extend::Trapped));
+            }
+            let outcome = extend(
+                &mut tree,
+                &free,
+                &space,
+                &mut screening,
+                2.0,
+                None,
+                halve_after,
+            );
+            (tree, outcome)
+        };
+        // Two failures with halving after two: a step of 1 rad towards the free target.
+        let (mut tree, outcome) = grow(Some(2));
+        assert!(matches!(outcome, Extend::Advanced(1)));
+        assert_eq!(tree.failures[0], 2);
+        assert!((distance(tree.node(0), tree.node(1)) - 1.0).abs() < 1e-12);
+        assert_eq!(tree.step(1, 2.0, Some(2)), 2.0);
+        tree.failures[0] = 100;
+        assert_eq!(tree.step(0, 2.0, Some(2)), MIN_STEP);
+        // Without halving the whole range: the target is reached.
+        let (tree, outcome) = grow(None);
+        assert!(matches!(outcome, Extend::Reached(1)));
+        assert_eq!(tree.failures[0], 0);
     }
 
     /// Screening waits until more than half the edges tried are blocked, then follows their

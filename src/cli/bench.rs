@@ -45,6 +45,10 @@ pub(crate) struct BenchPlanningArgs {
     /// Let the two trees take turns instead of always growing the smaller one.
     #[arg(long)]
     pub no_balance: bool,
+    /// Keep every step at the full range instead of halving a node's step for every 1,000
+    /// extensions from it that met an obstacle, to measure what the halving gives.
+    #[arg(long)]
+    pub no_step_halving: bool,
     /// Only the problems of these sets (repeatable).
     #[arg(long, value_name = "NAME")]
     pub set: Vec<String>,

@@ -12,7 +12,7 @@ use akl_planner::benchmark::{
     Times,
 };
 use akl_planner::collision::RobotCollision;
-use akl_planner::{DynamicDomain, RrtOptions};
+use akl_planner::{DynamicDomain, RrtOptions, HALVE_STEP_AFTER};
 use std::path::Path;
 
 /// Runs `akl bench ...`.
@@ -52,6 +52,7 @@ fn planning(args: &BenchPlanningArgs) -> CliResult {
             max_iterations: args.max_iterations,
             dynamic_domain: (!args.no_dynamic_domain).then(DynamicDomain::default),
             balance: !args.no_balance,
+            halve_step_after: (!args.no_step_halving).then_some(HALVE_STEP_AFTER),
             ..RrtOptions::default()
         },
     };
