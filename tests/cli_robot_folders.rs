@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{akl, scratch, stderr};
+use common::{akl, json, scratch, stderr, stdout};
 use std::path::{Path, PathBuf};
 
 /// A copy of the built-in Panda's folder with its URDF and `robot.toml` edited, the meshes
@@ -117,4 +117,52 @@ fn a_folder_without_robot_toml_is_named() {
         "{e}"
     );
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `akl robot tables` writes a folder's self-collision tables, which the folder's robot then
+/// reads (the same bytes as the built-in Panda's, whose folder it copies); a corrupt file is
+/// refused, naming it.
+#[test]
+fn a_folder_reads_the_tables_written_for_it_and_refuses_a_corrupt_file() {
+    let dir = panda_folder("folder-tables", "fer.urdf", str::to_string, str::to_string);
+    let before = stdout(&info(&dir));
+    assert!(
+        before.contains("0 read from self_tables.bin, the rest filled as checks reach them"),
+        "{before}"
+    );
+    let out = akl(&[
+        "robot",
+        "tables",
+        "--robot",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(json(&out)["tables"], 3);
+    let file = dir.join("self_tables.bin");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/panda/self_tables.bin");
+    assert!(
+        std::fs::read(&file).unwrap() == std::fs::read(repo).unwrap(),
+        "the folder's tables differ from robots/panda/self_tables.bin"
+    );
+    let after = stdout(&info(&dir));
+    assert!(after.contains("all read from self_tables.bin"), "{after}");
+    let bytes = std::fs::read(&file).unwrap();
+    std::fs::write(&file, &bytes[..bytes.len() - 3]).unwrap();
+    let out = info(&dir);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains("self_tables.bin: truncated or corrupt: the file ends within"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The built-in Panda's tables go to a file named with --output.
+#[test]
+fn the_built_in_robots_tables_need_an_output_file() {
+    let out = akl(&["robot", "tables"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--output"), "{}", stderr(&out));
 }

@@ -38,6 +38,14 @@ pub enum RobotError {
         /// What is wrong.
         message: String,
     },
+    /// The robot's stored self-collision tables are malformed.
+    #[error("{}: {source}", path.display())]
+    StoredTables {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: crate::collision::StoredTablesError,
+    },
     /// Mesh files the URDF names cannot be found or read: every one of them, not only the
     /// first.
     #[error("{}: {} mesh(es) cannot be read:{}", urdf.display(), failures.len(), MeshFailure::list(failures))]

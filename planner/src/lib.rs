@@ -63,7 +63,7 @@ pub use meshes::{LinkMesh, MeshRole, PackagePath};
 pub use options::{PlanBudget, PlanOptions, MS_PER_KEYFRAME};
 pub use parry_convert::cylinder_axis;
 pub use plan::{GripperAction, GripperEvent, LinePoses, Plan, Segment, SegmentKind};
-pub use robot::Robot;
+pub use robot::{Robot, STORED_TABLES_FILE};
 pub use rrt::{DynamicDomain, RrtOptions, HALVE_STEP_AFTER, MIN_STEP};
 pub use search::{plan_best, plan_task, BestPlan, CandidateOutcome};
 pub use squeeze::{squared_in_hand, squaring_turn};

@@ -2,6 +2,7 @@
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
 use crate::collision::pair_table::PairTable;
+use crate::collision::StoredTables;
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
 use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
@@ -27,6 +28,11 @@ macro_rules! panda_mesh {
 pub(crate) const PANDA_TOML: &str = include_str!("../../robots/panda/robot.toml");
 /// The Panda's URDF (franka_description's `fer.urdf`), embedded.
 pub(crate) const PANDA_URDF: &str = include_str!("../../robots/panda/fer.urdf");
+/// The Panda's self-collision table values, computed ahead by `akl robot tables`.
+const PANDA_TABLES: &[u8] = include_bytes!("../../robots/panda/self_tables.bin");
+
+/// The file of a robot folder that holds its self-collision table values.
+pub const STORED_TABLES_FILE: &str = "self_tables.bin";
 
 /// The Panda's meshes, embedded, by their path in `robots/panda`.
 const PANDA_MESHES: EmbeddedFiles = &[
@@ -144,6 +150,8 @@ pub struct Robot {
     /// The collision model's distance tables, per self margin (its bits), shared by every
     /// model built for this robot so that what one plan computes serves the next.
     pair_tables: Mutex<Vec<(u64, PairTables)>>,
+    /// Table values computed ahead (`self_tables.bin`), taken by the tables they fit.
+    stored_tables: StoredTables,
 }
 
 /// The distance tables of a collision model's self pairs, in the model's pair order.
@@ -157,7 +165,7 @@ impl Robot {
 
     /// The built-in Panda with another `robot.toml` (e.g. another IK solver or margins).
     pub(crate) fn panda_with(toml_text: &str) -> Result<Robot, RobotError> {
-        Robot::build(
+        let mut robot = Robot::build(
             toml_text,
             Path::new("robots/panda/robot.toml"),
             PANDA_URDF,
@@ -165,7 +173,13 @@ impl Robot {
             &[],
             Some(PANDA_MESHES),
             GripperCheck::Simulated,
-        )
+        )?;
+        robot.stored_tables =
+            StoredTables::parse(PANDA_TABLES).map_err(|source| RobotError::StoredTables {
+                path: Path::new("robots/panda").join(STORED_TABLES_FILE),
+                source,
+            })?;
+        Ok(robot)
     }
 
     /// Loads the robot folder `dir`: its `robot.toml` and the URDF that names.
@@ -196,7 +210,7 @@ impl Robot {
         })?;
         let urdf_path = dir.join(&config.urdf);
         let urdf_text = read(&urdf_path)?;
-        Robot::build(
+        let mut robot = Robot::build(
             &toml_text,
             &toml_path,
             &urdf_text,
@@ -204,7 +218,20 @@ impl Robot {
             packages,
             None,
             GripperCheck::Simulated,
-        )
+        )?;
+        let tables_path = dir.join(STORED_TABLES_FILE);
+        if tables_path.exists() {
+            let bytes = std::fs::read(&tables_path).map_err(|source| RobotError::Io {
+                path: tables_path.clone(),
+                source,
+            })?;
+            robot.stored_tables =
+                StoredTables::parse(&bytes).map_err(|source| RobotError::StoredTables {
+                    path: tables_path,
+                    source,
+                })?;
+        }
+        Ok(robot)
     }
 
     /// Builds a robot from the texts of its `robot.toml` and URDF; the paths name them in
@@ -346,6 +373,7 @@ impl Robot {
             meshes: geometry.meshes,
             digest: OnceLock::new(),
             pair_tables: Mutex::new(Vec::new()),
+            stored_tables: StoredTables::default(),
         };
         // A linkage's opening is mapped to its knuckle angle through the pads' gap.
         if let Some(map) = crate::hand::linkage_width_map(&robot) {
@@ -382,6 +410,11 @@ impl Robot {
         let tables = build();
         cache.push((key, tables.clone()));
         tables
+    }
+
+    /// Self-collision table values computed ahead (empty if the robot has none).
+    pub(crate) fn stored_tables(&self) -> &StoredTables {
+        &self.stored_tables
     }
 
     /// SHA-256 (hex) of everything the robot is built from: `robot.toml`, the URDF and every

@@ -45,6 +45,29 @@ pub(crate) enum RobotCommand {
     /// folder that already holds robot.toml, or a written folder that does not load (e.g. a
     /// gripper the simulation cannot drive: the folder is kept for editing).
     Init(RobotInitArgs),
+    /// Compute the robot's self-collision tables ahead and write them to a file.
+    ///
+    /// Checks fill the tables of link pairs that one or two joints move against each other
+    /// node by node as they reach them (about 3 µs a node). A robot folder's
+    /// `self_tables.bin`, which this command writes, gives every process all of them at
+    /// start. Values are stored under a fingerprint of the robot, its margins and the code
+    /// that computes them: a table whose fingerprint differs ignores them and fills itself.
+    /// The built-in Panda's are embedded (robots/panda/self_tables.bin). Exits with 2 on bad
+    /// input.
+    Tables {
+        #[command(flatten)]
+        robot: RobotArg,
+        /// The file to write (default: the robot folder's self_tables.bin; required for the
+        /// built-in Panda).
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        /// Threads that compute nodes (default: the number of cores).
+        #[arg(long, value_name = "J")]
+        jobs: Option<usize>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Inverse kinematics: the configuration nearest a seed that puts the TCP at a pose.
     ///
     /// The pose is in the robot base frame. Exits with 1 and says "unreachable" if no

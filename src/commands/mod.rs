@@ -15,6 +15,7 @@ mod report;
 mod robot;
 mod robot_check;
 mod robot_init;
+mod robot_tables;
 mod score;
 mod spec;
 mod task;

@@ -26,6 +26,12 @@ pub(super) fn run(cmd: RobotCommand) -> CliResult {
         } => ik(&pose, seed_joints.as_deref(), &robot, json),
         RobotCommand::Check(args) => super::robot_check::run(&args),
         RobotCommand::Init(args) => super::robot_init::run(&args),
+        RobotCommand::Tables {
+            robot,
+            output,
+            jobs,
+            json,
+        } => super::robot_tables::run(&robot, output.as_deref(), jobs, json),
     }
 }
 
@@ -103,6 +109,8 @@ struct Info {
     margins: akl_planner::CollisionConfig,
     /// Where the robot stands in the task's robot base frame (`None`: at the robot base).
     mount: Option<akl_planner::MountConfig>,
+    /// The self-collision tables, and how many were read from `self_tables.bin`.
+    self_tables: akl_planner::collision::TableSummary,
     links: Vec<LinkInfo>,
 }
 
@@ -145,6 +153,7 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
             .collect(),
         margins: c.collision.clone(),
         mount: c.mount,
+        self_tables: akl_planner::collision::RobotCollision::new(&robot).table_summary(),
         links: links
             .iter()
             .enumerate()
@@ -222,6 +231,23 @@ fn info(arg: &RobotArg, json: bool) -> CliResult {
         ),
         None => println!("mount: at the task's robot base"),
     }
+    let t = &summary.self_tables;
+    println!(
+        "self-collision tables: {} link pair(s), {} nodes; {}",
+        t.tables,
+        t.nodes,
+        if t.tables == 0 {
+            "none".to_string()
+        } else if t.stored == t.tables {
+            format!("all read from {}", akl_planner::STORED_TABLES_FILE)
+        } else {
+            format!(
+                "{} read from {}, the rest filled as checks reach them (`akl robot tables` writes them ahead)",
+                t.stored,
+                akl_planner::STORED_TABLES_FILE
+            )
+        }
+    );
     println!();
     let mut shapes = Table::new([
         "link",

@@ -34,6 +34,7 @@ pub(crate) mod pair_table;
 mod report;
 mod scene;
 mod spheres;
+mod stored;
 mod sweep;
 #[cfg(test)]
 mod tests;
@@ -42,6 +43,7 @@ pub use checker::Checker;
 pub use exact::ExactShape;
 pub use held::Held;
 pub use hit::Hit;
-pub use model::{Margins, RobotCollision};
+pub use model::{Margins, RobotCollision, TableSummary};
 pub use report::{CheckReport, Clearance, Contact};
 pub use scene::Scene;
+pub use stored::{StoredTables, StoredTablesError};

@@ -3,6 +3,7 @@
 
 use super::pair_table::PairTable;
 use super::spheres::Spheres;
+use super::stored::StoredTables;
 use crate::contact_rules::LinkRole;
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
@@ -62,6 +63,17 @@ pub(super) struct Mover {
     pub(super) scale: f64,
     /// `None` for a prismatic joint.
     pub(super) axis: Option<Vector3<f64>>,
+}
+
+/// A collision model's self-collision tables ([`RobotCollision::table_summary`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct TableSummary {
+    /// Link pairs with a table.
+    pub tables: usize,
+    /// Nodes over all tables.
+    pub nodes: usize,
+    /// Tables whose values were read from the robot's `self_tables.bin`.
+    pub stored: usize,
 }
 
 /// The robot's collision model: its shapes, the link pairs to test and the joint chains used
@@ -252,7 +264,15 @@ impl RobotCollision {
                 .zip(&self_shared)
                 .map(|(&(i, j), &s)| {
                     let beyond = [&chains[i][s..], &chains[j][s..]];
-                    PairTable::for_pair(robot, &bodies[i], &bodies[j], beyond, 0.5 * margins.self_)
+                    let (a, b) = (&bodies[i], &bodies[j]);
+                    let mut table = PairTable::for_pair(robot, a, b, beyond, 0.5 * margins.self_)?;
+                    let stored = robot.stored_tables();
+                    if !stored.is_empty() {
+                        if let Some(values) = stored.get(&table.fingerprint(robot, a, b)) {
+                            table.take_values(values);
+                        }
+                    }
+                    Some(table)
                 })
                 .collect()
         });
@@ -269,6 +289,31 @@ impl RobotCollision {
             tcp_shared,
             turned,
         }
+    }
+
+    /// The self-collision tables and how many of their nodes there are, and how many tables
+    /// took stored values when they were made.
+    pub fn table_summary(&self) -> TableSummary {
+        let tables: Vec<&PairTable> = self.tables.iter().flatten().collect();
+        TableSummary {
+            tables: tables.len(),
+            nodes: tables.iter().map(|t| t.len()).sum(),
+            stored: tables.iter().filter(|t| t.stored()).count(),
+        }
+    }
+
+    /// Computes every node of every self-collision table not known yet, on `threads`
+    /// threads, and returns them all for a file (`akl robot tables`).
+    pub fn fill_tables(&self, robot: &Robot, threads: usize) -> StoredTables {
+        let mut stored = StoredTables::default();
+        for (table, &(i, j)) in self.tables.iter().zip(&self.self_pairs) {
+            let Some(table) = table else { continue };
+            let (a, b) = (&self.bodies[i], &self.bodies[j]);
+            table.fill(robot, a, b, threads);
+            let values = table.values().expect("every node was just computed");
+            stored.push(table.fingerprint(robot, a, b), values);
+        }
+        stored
     }
 
     /// What the contact rules need to know of `body`'s link.

@@ -20,6 +20,7 @@ use crate::geometry::Geometry;
 use crate::parry_convert;
 use crate::robot::Robot;
 use akl_tsr::nalgebra::Vector3;
+use sha2::{Digest, Sha256};
 use smallvec::SmallVec;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -33,6 +34,14 @@ const MAX_NODES: usize = 1 << 18;
 
 /// The stored pattern of a node not computed yet (a NaN, which no distance is).
 const UNKNOWN: u32 = u32::MAX;
+
+/// How node values are computed, as part of every table's fingerprint: raise it whenever
+/// [`PairTable::node_value`] or the shapes it measures change, so that values a build
+/// computed otherwise are never read from a file.
+const VALUES_VERSION: u32 = 1;
+
+/// A table's fingerprint: SHA-256 of everything its node values depend on.
+pub(super) type Fingerprint = [u8; 32];
 
 /// One joint a table runs over.
 #[derive(Debug, Clone, Copy)]
@@ -54,6 +63,8 @@ pub(crate) struct PairTable {
     /// How much the model grew each element for the other (half its self margin).
     grow: f64,
     cells: Box<[AtomicU32]>,
+    /// Whether the values were read from a file when the table was made.
+    stored: bool,
 }
 
 impl std::fmt::Debug for PairTable {
@@ -62,6 +73,7 @@ impl std::fmt::Debug for PairTable {
             .field("joints", &self.joints)
             .field("grow", &self.grow)
             .field("nodes", &self.cells.len())
+            .field("stored", &self.stored)
             .finish()
     }
 }
@@ -160,6 +172,7 @@ impl PairTable {
             joints,
             grow,
             cells: (0..nodes).map(|_| AtomicU32::new(UNKNOWN)).collect(),
+            stored: false,
         })
     }
 
@@ -194,14 +207,123 @@ impl PairTable {
         }
     }
 
-    /// The value of a node, with the arm at its ready configuration and the table's joints at
-    /// `values`: the distance (a lower bound), or where the two overlap, minus how deep a point
-    /// lies in both (a lower bound too); rounded towards zero to single precision.
-    fn node_value(&self, robot: &Robot, a: &Body, b: &Body, values: &[f64]) -> f32 {
+    /// Everything the node values depend on, hashed: the code's version, both elements (link,
+    /// shape, pose on the link), how much they are grown, the grid, the ready configuration
+    /// and opening the other joints take, both links' poses at three nodes (the robot's
+    /// kinematics as far as the values see it) and the values of three nodes. Values stored
+    /// under another fingerprint are not this table's.
+    pub(super) fn fingerprint(&self, robot: &Robot, a: &Body, b: &Body) -> Fingerprint {
+        let mut hash = Sha256::new();
+        hash.update(format!(
+            "akl {} values {VALUES_VERSION}\n",
+            env!("CARGO_PKG_VERSION")
+        ));
+        for body in [a, b] {
+            hash.update(format!(
+                "{} {:?} {:?}\n",
+                body.link, body.geometry, body.local
+            ));
+        }
+        hash.update(format!("{:?} {:?}\n", self.grow, self.joints));
+        hash.update(format!("{:?} {:?}\n", robot.ready(), robot.open_width()));
+        let first: SmallVec<[f64; 2]> = self.joints.iter().map(|j| j.lo).collect();
+        for stepped in 0..=self.joints.len() {
+            let mut node = first.clone();
+            if let Some(v) = node.get_mut(stepped) {
+                *v += self.joints[stepped].step;
+            }
+            let poses = robot
+                .kinematics()
+                .link_poses(&self.configuration(robot, &node), robot.open_width());
+            hash.update(format!("{:?} {:?}\n", poses[a.link], poses[b.link]));
+        }
+        // Three nodes computed now: a change to how values are computed that the version
+        // above does not record still changes the fingerprint.
+        for cell in [0, self.cells.len() / 2, self.cells.len() - 1] {
+            let value = self.node_value(robot, a, b, &self.node_at(cell));
+            hash.update(value.to_bits().to_le_bytes());
+        }
+        hash.finalize().into()
+    }
+
+    /// Number of nodes.
+    pub(super) fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Computes every node not computed yet, on `threads` threads.
+    pub(super) fn fill(&self, robot: &Robot, a: &Body, b: &Body, threads: usize) {
+        let share = self.cells.len().div_ceil(threads.max(1)).max(1);
+        std::thread::scope(|scope| {
+            for start in (0..self.cells.len()).step_by(share) {
+                scope.spawn(move || {
+                    for cell in start..(start + share).min(self.cells.len()) {
+                        if self.cells[cell].load(Ordering::Relaxed) == UNKNOWN {
+                            let node = self.node_at(cell);
+                            let v = self.node_value(robot, a, b, &node);
+                            self.cells[cell].store(v.to_bits(), Ordering::Relaxed);
+                        }
+                    }
+                });
+            }
+        });
+    }
+
+    /// Every node's value, `None` while some are not computed.
+    pub(super) fn values(&self) -> Option<Vec<f32>> {
+        self.cells
+            .iter()
+            .map(|c| {
+                let bits = c.load(Ordering::Relaxed);
+                (bits != UNKNOWN).then(|| f32::from_bits(bits))
+            })
+            .collect()
+    }
+
+    /// Takes `values` (one per node, in node order, as [`PairTable::values`] gives them) as
+    /// the nodes' values, read from a file; nothing is taken if their number is not the
+    /// table's or one is not a number.
+    pub(super) fn take_values(&mut self, values: &[f32]) {
+        if values.len() != self.cells.len() || values.iter().any(|v| v.is_nan()) {
+            return;
+        }
+        for (cell, v) in self.cells.iter().zip(values) {
+            cell.store(v.to_bits(), Ordering::Relaxed);
+        }
+        self.stored = true;
+    }
+
+    /// Whether the values were read from a file when the table was made.
+    pub(super) fn stored(&self) -> bool {
+        self.stored
+    }
+
+    /// The table joints' values at node `cell` (the first joint varies slowest).
+    fn node_at(&self, cell: usize) -> SmallVec<[f64; 2]> {
+        let mut node: SmallVec<[f64; 2]> = SmallVec::from_elem(0.0, self.joints.len());
+        let mut rest = cell;
+        for (k, j) in self.joints.iter().enumerate().rev() {
+            node[k] = j.lo + (rest % j.count) as f64 * j.step;
+            rest /= j.count;
+        }
+        node
+    }
+
+    /// The arm configuration of a node: the ready configuration with the table's joints at
+    /// `values`.
+    fn configuration(&self, robot: &Robot, values: &[f64]) -> Vec<f64> {
         let mut q = robot.ready().to_vec();
         for (j, v) in self.joints.iter().zip(values) {
             q[j.index] = *v;
         }
+        q
+    }
+
+    /// The value of a node, with the arm at its ready configuration and the table's joints at
+    /// `values`: the distance (a lower bound), or where the two overlap, minus how deep a point
+    /// lies in both (a lower bound too); rounded towards zero to single precision.
+    fn node_value(&self, robot: &Robot, a: &Body, b: &Body, values: &[f64]) -> f32 {
+        let q = self.configuration(robot, values);
         let poses = robot.kinematics().link_poses(&q, robot.open_width());
         let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
         let d = parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
@@ -489,11 +611,12 @@ mod tests {
         }
     }
 
-    /// A node's value is the same whichever configuration first asked for it.
+    /// A node's value is the same whichever configuration first asked for it (tables filled
+    /// as checks reach them: the model without margins has none stored).
     #[test]
     fn a_node_does_not_depend_on_who_filled_it() {
         let robot = Robot::panda().unwrap();
-        let model = RobotCollision::new(&robot);
+        let [_, model] = with_and_without_margins(&robot);
         let (t, a, b) = tabled(&model)[0];
         let (p, &(i, j)) = model
             .self_pairs
@@ -514,6 +637,81 @@ mod tests {
             let first = t.lookup(&robot, a, b, &other);
             assert_eq!(first, t.lookup(&robot, a, b, &q));
             assert_eq!(fresh.lookup(&robot, a, b, &q), first);
+        }
+    }
+
+    /// The built-in Panda's tables are read from robots/panda/self_tables.bin, and what was
+    /// read is what the nodes compute (300 random nodes per table, to a micrometre: the
+    /// platform's sine and cosine may differ in their last bits).
+    #[test]
+    fn the_built_in_tables_are_stored_and_current() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let summary = model.table_summary();
+        assert!(summary.tables > 0);
+        assert_eq!(
+            summary.stored, summary.tables,
+            "robots/panda/self_tables.bin does not fit the built-in Panda's collision model: \
+             write it again with `cargo run --release -- robot tables -o robots/panda/self_tables.bin`"
+        );
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        for (t, a, b) in tabled(&model) {
+            let values = t.values().expect("stored tables know every node");
+            for _ in 0..300 {
+                let cell = rng.gen_range(0..t.len());
+                let computed = t.node_value(&robot, a, b, &t.node_at(cell));
+                assert!(
+                    (f64::from(computed) - f64::from(values[cell])).abs() <= 1e-6,
+                    "node {cell}: stored {}, computed {computed}",
+                    values[cell]
+                );
+            }
+        }
+    }
+
+    /// Stored values are taken only by tables with their fingerprint: a model with other
+    /// margins, or a robot with another ready configuration (which the nodes' other joints
+    /// take), fills its tables itself.
+    #[test]
+    fn other_margins_or_another_robot_ignore_the_stored_tables() {
+        let robot = Robot::panda().unwrap();
+        let [with, bare] = with_and_without_margins(&robot);
+        assert_eq!(with.table_summary().stored, with.table_summary().tables);
+        assert_eq!(bare.table_summary().stored, 0);
+        let toml = crate::robot::PANDA_TOML.replace(
+            "ready = [0.0, -0.7853981633974483,",
+            "ready = [0.1, -0.7853981633974483,",
+        );
+        assert_ne!(toml, crate::robot::PANDA_TOML);
+        let moved = Robot::panda_with(&toml).unwrap();
+        let model = RobotCollision::new(&moved);
+        assert_eq!(model.table_summary().stored, 0);
+        assert!(tabled(&model).iter().all(|(t, _, _)| t.values().is_none()));
+    }
+
+    /// Filling a table computes every node once, whatever the number of threads, to the
+    /// values a lookup would compute.
+    #[test]
+    fn filled_tables_hold_every_node() {
+        let robot = Robot::panda().unwrap();
+        let bare = Margins {
+            arm: 0.0,
+            hand: 0.0,
+            held: 0.0,
+            self_: 0.0,
+        };
+        let model = RobotCollision::with_margins(&robot, bare);
+        let stored = model.fill_tables(&robot, 3);
+        assert_eq!(stored.len(), model.table_summary().tables);
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        for (t, a, b) in tabled(&model) {
+            let values = t.values().expect("filled");
+            assert_eq!(stored.get(&t.fingerprint(&robot, a, b)), Some(&values[..]));
+            for _ in 0..50 {
+                let cell = rng.gen_range(0..t.len());
+                let computed = t.node_value(&robot, a, b, &t.node_at(cell));
+                assert_eq!(computed.to_bits(), values[cell].to_bits());
+            }
         }
     }
 }
