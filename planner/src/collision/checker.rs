@@ -260,6 +260,13 @@ impl<'a> Checker<'a> {
                 if tabled > 0.0 && pr.settled(moved, self_slack + tabled) {
                     continue;
                 }
+                // A full table bounds the pair over the whole stretch at once.
+                if let Some(t) = model.tables[p].as_ref().filter(|_| tabled > 0.0) {
+                    let stretch = (&pr.sweep.half[..], pr.fraction);
+                    if t.clear_over(self.robot, q, stretch, -self_slack) {
+                        continue;
+                    }
+                }
                 if centres_sq > balls * balls
                     && pr.settled_sq(moved, self_slack - balls, centres_sq)
                 {

@@ -29,6 +29,7 @@ mod cull;
 mod exact;
 mod held;
 mod hit;
+mod minima;
 mod model;
 pub(crate) mod pair_table;
 mod report;

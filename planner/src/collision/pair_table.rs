@@ -14,6 +14,7 @@
 
 use super::checker::DISTANCE_TOLERANCE;
 use super::cull::placed;
+use super::minima::Minima;
 use super::model::{Body, Mover};
 use crate::fk::{Drive, Kinematics, Motion};
 use crate::geometry::Geometry;
@@ -65,6 +66,8 @@ pub(crate) struct PairTable {
     cells: Box<[AtomicU32]>,
     /// Whether the values were read from a file when the table was made.
     stored: bool,
+    /// Block minima of the values, when all were known when the table was made.
+    minima: Option<Minima>,
 }
 
 impl std::fmt::Debug for PairTable {
@@ -173,6 +176,7 @@ impl PairTable {
             grow,
             cells: (0..nodes).map(|_| AtomicU32::new(UNKNOWN)).collect(),
             stored: false,
+            minima: None,
         })
     }
 
@@ -291,6 +295,49 @@ impl PairTable {
             cell.store(v.to_bits(), Ordering::Relaxed);
         }
         self.stored = true;
+        let columns = self.joints.get(1).map_or(1, |j| j.count);
+        self.minima = Some(Minima::new(self.joints[0].count, columns, values));
+    }
+
+    /// Whether the two elements (each grown by half the self margin) stay more than `least`
+    /// apart wherever the arm goes within `share`·`half` (per arm joint) of `q` within the
+    /// joint limits: the stretch of an edge proof, bounded at once where the bound at one
+    /// configuration would shrink by the stretch's whole motion. Known only for tables whose
+    /// values were all known when they were made (false otherwise, and where a node in the
+    /// box holds no distance).
+    ///
+    /// Every configuration in the box has its nearest node among the nodes of the box's
+    /// cells, at most half a step away along each table joint; the least of those nodes'
+    /// values, less what half a step can move the moving element, bounds the box.
+    pub(super) fn clear_over(
+        &self,
+        robot: &Robot,
+        q: &[f64],
+        (half, share): (&[f64], f64),
+        least: f64,
+    ) -> bool {
+        let Some(minima) = &self.minima else {
+            return false;
+        };
+        let limits = robot.joint_limits();
+        let mut ranges = [(0, 0); 2];
+        let mut slack = DISTANCE_TOLERANCE;
+        for (range, j) in ranges.iter_mut().zip(&self.joints) {
+            let [lo, hi] = limits[j.index];
+            let node = |v: f64| {
+                ((v - j.lo) / j.step)
+                    .round()
+                    .clamp(0.0, (j.count - 1) as f64) as usize
+            };
+            let reach = share * half[j.index];
+            *range = (
+                node((q[j.index] - reach).max(lo)),
+                node((q[j.index] + reach).min(hi)),
+            );
+            slack += j.reach * 0.5 * j.step;
+        }
+        let value = f64::from(minima.least(ranges[0], ranges[1]));
+        value > 0.0 && value - slack > least
     }
 
     /// Whether the values were read from a file when the table was made.
@@ -712,6 +759,67 @@ mod tests {
                 let computed = t.node_value(&robot, a, b, &t.node_at(cell));
                 assert_eq!(computed.to_bits(), values[cell].to_bits());
             }
+        }
+    }
+
+    /// A stretch a stored table clears keeps its pair apart by the asked distance all
+    /// through it (its corners in the table's joints and random configurations in it, the
+    /// distance measured by parry), it clears many stretches (it is worth asking), and a
+    /// table filled as checks go has no block minima and clears none.
+    #[test]
+    fn a_stretch_the_table_clears_is_clear_throughout() {
+        let robot = Robot::panda().unwrap();
+        let [with, bare] = with_and_without_margins(&robot);
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        for ((t, a, b), (unstored, _, _)) in tabled(&with).into_iter().zip(tabled(&bare)) {
+            let (mut asked, mut cleared) = (0, 0);
+            for _ in 0..400 {
+                let q = random_q(&robot, &mut rng);
+                let half: Vec<f64> = q.iter().map(|_| rng.gen_range(0.0..0.3)).collect();
+                let least = rng.gen_range(-0.005..0.01);
+                asked += 1;
+                assert!(!unstored.clear_over(&robot, &q, (&half, 1.0), least));
+                if !t.clear_over(&robot, &q, (&half, 1.0), least) {
+                    continue;
+                }
+                cleared += 1;
+                for k in 0..24 {
+                    let mut x: Vec<f64> = q
+                        .iter()
+                        .zip(&half)
+                        .map(|(v, h)| v + rng.gen_range(-h..=*h))
+                        .collect();
+                    if k < 4 {
+                        for (n, j) in t.joints.iter().enumerate() {
+                            let side = if (k >> n) & 1 == 0 { -1.0 } else { 1.0 };
+                            x[j.index] = q[j.index] + side * half[j.index];
+                        }
+                    }
+                    for (v, [lo, hi]) in x.iter_mut().zip(robot.joint_limits()) {
+                        *v = v.clamp(*lo, *hi);
+                    }
+                    let poses = robot.kinematics().link_poses(&x, robot.open_width());
+                    let (pa, pb) = (placed(a, &poses[a.link]), placed(b, &poses[b.link]));
+                    let apart = !parry_convert::intersects(
+                        &a.self_shape,
+                        &pa.pose,
+                        &b.self_shape,
+                        &pb.pose,
+                    );
+                    let d =
+                        parry_convert::distance(&a.self_shape, &pa.pose, &b.self_shape, &pb.pose)
+                            .filter(|_| apart)
+                            .unwrap_or(-f64::INFINITY);
+                    assert!(
+                        d > least,
+                        "cleared about {q:?} (±{half:?}) above {least}, but {d} at {x:?}"
+                    );
+                }
+            }
+            assert!(
+                cleared * 4 >= asked,
+                "{cleared} of {asked} stretches cleared"
+            );
         }
     }
 }
