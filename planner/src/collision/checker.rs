@@ -261,7 +261,7 @@ impl<'a> Checker<'a> {
                     continue;
                 }
                 // A full table bounds the pair over the whole stretch at once (asked where
-                // it puts the pair apart here: elsewhere its blocks hold no distance).
+                // it puts the pair apart here: elsewhere its blocks seldom clear it).
                 if let Some(t) = model.tables[p].as_ref().filter(|_| tabled > 0.0) {
                     let stretch = (&pr.sweep.half[..], pr.fraction);
                     if t.clear_over(self.robot, q, stretch, -self_slack) {
