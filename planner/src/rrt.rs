@@ -399,13 +399,9 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    /// A sample beyond a node's dynamic domain is turned away unchecked; an extension that
-    /// meets an obstacle gives its node the domain's radius, and each later failure narrows it
-    /// down to the least radius.
-    #[test]
-    fn the_dynamic_domain_turns_far_samples_away_and_narrows_on_failure() {
-        let robot = Robot::panda().unwrap();
-        let model = RobotCollision::new(&robot);
+    /// The pick-and-place world with a wall that turning joint 1 by 1.2 rad from the ready
+    /// pose sweeps the arm through (the other way is free).
+    fn beside_a_wall() -> akl_scene::World {
         let mut world = builtin::task("pick_place").unwrap().unwrap().world;
         world.objects.push(Object {
             name: "wall".into(),
@@ -417,7 +413,17 @@ mod tests {
             mass: 0.0,
             friction: 0.5,
         });
-        let scene = Scene::new(&world, &[]);
+        world
+    }
+
+    /// A sample beyond a node's dynamic domain is turned away unchecked; an extension that
+    /// meets an obstacle gives its node the domain's radius, and each later failure narrows it
+    /// down to the least radius.
+    #[test]
+    fn the_dynamic_domain_turns_far_samples_away_and_narrows_on_failure() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let scene = Scene::new(&beside_a_wall(), &[]);
         let checker = Checker::new(&robot, &model, &scene);
         let allow = Allowances::default();
         let space = Space {
@@ -490,18 +496,7 @@ mod tests {
     fn failures_shrink_a_nodes_step() {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
-        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
-        world.objects.push(Object {
-            name: "wall".into(),
-            shape: Shape::Box {
-                size: [0.4, 0.02, 0.7],
-            },
-            pose: pose_from_xyz([0.4, 0.2, 0.55]),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
-        let scene = Scene::new(&world, &[]);
+        let scene = Scene::new(&beside_a_wall(), &[]);
         let checker = Checker::new(&robot, &model, &scene);
         let allow = Allowances::default();
         let space = Space {
