@@ -218,18 +218,16 @@ impl PairTable {
     /// under another fingerprint are not this table's.
     pub(super) fn fingerprint(&self, robot: &Robot, a: &Body, b: &Body) -> Fingerprint {
         let mut hash = Sha256::new();
-        hash.update(format!(
+        let mut add = |text: String| hash.update(rounded(&text));
+        add(format!(
             "akl {} values {VALUES_VERSION}\n",
             env!("CARGO_PKG_VERSION")
         ));
         for body in [a, b] {
-            hash.update(format!(
-                "{} {:?} {:?}\n",
-                body.link, body.geometry, body.local
-            ));
+            add(format!("{} {:?} {:?}\n", body.link, body.geometry, body.local));
         }
-        hash.update(format!("{:?} {:?}\n", self.grow, self.joints));
-        hash.update(format!("{:?} {:?}\n", robot.ready(), robot.open_width()));
+        add(format!("{:?} {:?}\n", self.grow, self.joints));
+        add(format!("{:?} {:?}\n", robot.ready(), robot.open_width()));
         let first: SmallVec<[f64; 2]> = self.joints.iter().map(|j| j.lo).collect();
         for stepped in 0..=self.joints.len() {
             let mut node = first.clone();
@@ -239,13 +237,14 @@ impl PairTable {
             let poses = robot
                 .kinematics()
                 .link_poses(&self.configuration(robot, &node), robot.open_width());
-            hash.update(format!("{:?} {:?}\n", poses[a.link], poses[b.link]));
+            add(format!("{:?} {:?}\n", poses[a.link], poses[b.link]));
         }
         // Three nodes computed now: a change to how values are computed that the version
-        // above does not record still changes the fingerprint.
+        // above does not record still changes the fingerprint (to 10 µm, coarser than the
+        // last bits another platform's sine may change).
         for cell in [0, self.cells.len() / 2, self.cells.len() - 1] {
             let value = self.node_value(robot, a, b, &self.node_at(cell));
-            hash.update(value.to_bits().to_le_bytes());
+            add(format!("{:.5}\n", (f64::from(value) * 1e5).round() * 1e-5));
         }
         hash.finalize().into()
     }
@@ -388,6 +387,34 @@ impl PairTable {
         };
         toward_zero(value)
     }
+}
+
+/// `text` with every number in it rounded to nine decimals (zero without a sign): what a
+/// fingerprint hashes, so that the last bits another platform's sine and cosine may change
+/// in a pose do not change it.
+fn rounded(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut token = String::new();
+    let flush = |token: &mut String, out: &mut String| {
+        match token.parse::<f64>() {
+            Ok(v) => {
+                let r = (v * 1e9).round() / 1e9;
+                out.push_str(&format!("{:.9}", if r == 0.0 { 0.0 } else { r }));
+            }
+            Err(_) => out.push_str(token),
+        }
+        token.clear();
+    };
+    for c in text.chars() {
+        if c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E') {
+            token.push(c);
+        } else {
+            flush(&mut token, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut token, &mut out);
+    out
 }
 
 /// What a table tells of a pair at a configuration.
@@ -821,5 +848,17 @@ mod tests {
                 "{cleared} of {asked} stretches cleared"
             );
         }
+    }
+
+    /// Numbers are rounded to nine decimals wherever they stand in the text; words and
+    /// punctuation stay.
+    #[test]
+    fn fingerprints_hash_numbers_rounded() {
+        assert_eq!(
+            rounded("Box { size: [0.1000000000000001, -2e-12, 3] } link5"),
+            "Box { size: [0.100000000, 0.000000000, 3.000000000] } link5.000000000"
+        );
+        assert_eq!(rounded("q7 0.30000000000000004"), rounded("q7 0.3"));
+        assert_ne!(rounded("0.3000001"), rounded("0.3"));
     }
 }
