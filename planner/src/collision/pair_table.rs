@@ -224,7 +224,10 @@ impl PairTable {
             env!("CARGO_PKG_VERSION")
         ));
         for body in [a, b] {
-            add(format!("{} {:?} {:?}\n", body.link, body.geometry, body.local));
+            add(format!(
+                "{} {:?} {:?}\n",
+                body.link, body.geometry, body.local
+            ));
         }
         add(format!("{:?} {:?}\n", self.grow, self.joints));
         add(format!("{:?} {:?}\n", robot.ready(), robot.open_width()));
