@@ -332,10 +332,12 @@ impl PairTable {
                     .clamp(0.0, (j.count - 1) as f64) as usize
             };
             let reach = share * half[j.index];
-            *range = (
+            let (from, to) = (
                 node((q[j.index] - reach).max(lo)),
                 node((q[j.index] + reach).min(hi)),
             );
+            // In order even for a configuration a rounding error put past a limit.
+            *range = (from.min(to), from.max(to));
             slack += j.reach * 0.5 * j.step;
         }
         let value = f64::from(minima.least(ranges[0], ranges[1]));
