@@ -57,6 +57,16 @@ struct TableJoint {
     reach: f64,
 }
 
+impl TableJoint {
+    /// The index of the node nearest the arm-joint value `v` (an end of the grid for a value
+    /// beyond it).
+    fn nearest(&self, v: f64) -> usize {
+        ((v - self.lo) / self.step)
+            .round()
+            .clamp(0.0, (self.count - 1) as f64) as usize
+    }
+}
+
 /// Lower bounds on the distance between the two elements of one self-collision pair, over a
 /// grid of the one or two arm joints that move them against each other.
 pub(crate) struct PairTable {
@@ -185,25 +195,13 @@ impl PairTable {
     pub(super) fn lookup(&self, robot: &Robot, a: &Body, b: &Body, q: &[f64]) -> Tabled {
         let mut cell = 0;
         let mut slack = DISTANCE_TOLERANCE;
-        let mut node = [0.0; 2];
-        for (k, j) in self.joints.iter().enumerate() {
+        for j in &self.joints {
             let v = q[j.index];
-            let i = ((v - j.lo) / j.step)
-                .round()
-                .clamp(0.0, (j.count - 1) as f64) as usize;
-            node[k] = j.lo + i as f64 * j.step;
-            slack += j.reach * (v - node[k]).abs();
+            let i = j.nearest(v);
+            slack += j.reach * (v - (j.lo + i as f64 * j.step)).abs();
             cell = cell * j.count + i;
         }
-        let bits = self.cells[cell].load(Ordering::Relaxed);
-        let value = if bits == UNKNOWN {
-            let v = self.node_value(robot, a, b, &node[..self.joints.len()]);
-            self.cells[cell].store(v.to_bits(), Ordering::Relaxed);
-            v
-        } else {
-            f32::from_bits(bits)
-        };
-        let value = f64::from(value);
+        let value = f64::from(self.value_at(robot, a, b, cell));
         if value < 0.0 && -value > slack {
             Tabled::Overlapping
         } else {
@@ -264,11 +262,7 @@ impl PairTable {
             for start in (0..self.cells.len()).step_by(share) {
                 scope.spawn(move || {
                     for cell in start..(start + share).min(self.cells.len()) {
-                        if self.cells[cell].load(Ordering::Relaxed) == UNKNOWN {
-                            let node = self.node_at(cell);
-                            let v = self.node_value(robot, a, b, &node);
-                            self.cells[cell].store(v.to_bits(), Ordering::Relaxed);
-                        }
+                        self.value_at(robot, a, b, cell);
                     }
                 });
             }
@@ -326,18 +320,12 @@ impl PairTable {
         let mut slack = DISTANCE_TOLERANCE;
         for (range, j) in ranges.iter_mut().zip(&self.joints) {
             let [lo, hi] = limits[j.index];
-            let node = |v: f64| {
-                ((v - j.lo) / j.step)
-                    .round()
-                    .clamp(0.0, (j.count - 1) as f64) as usize
-            };
             let reach = share * half[j.index];
-            let (from, to) = (
-                node((q[j.index] - reach).max(lo)),
-                node((q[j.index] + reach).min(hi)),
+            // In order: `nearest` is monotonic and clamps to the grid, whose ends are the limits.
+            *range = (
+                j.nearest((q[j.index] - reach).max(lo)),
+                j.nearest((q[j.index] + reach).min(hi)),
             );
-            // In order even for a configuration a rounding error put past a limit.
-            *range = (from.min(to), from.max(to));
             slack += j.reach * 0.5 * j.step;
         }
         let value = f64::from(minima.least(ranges[0], ranges[1]));
@@ -347,6 +335,17 @@ impl PairTable {
     /// Whether the values were read from a file when the table was made.
     pub(super) fn stored(&self) -> bool {
         self.stored
+    }
+
+    /// Node `cell`'s value, computed and kept the first time it is asked for.
+    fn value_at(&self, robot: &Robot, a: &Body, b: &Body, cell: usize) -> f32 {
+        let bits = self.cells[cell].load(Ordering::Relaxed);
+        if bits != UNKNOWN {
+            return f32::from_bits(bits);
+        }
+        let v = self.node_value(robot, a, b, &self.node_at(cell));
+        self.cells[cell].store(v.to_bits(), Ordering::Relaxed);
+        v
     }
 
     /// The table joints' values at node `cell` (the first joint varies slowest).
@@ -865,5 +864,34 @@ mod tests {
         );
         assert_eq!(rounded("q7 0.30000000000000004"), rounded("q7 0.3"));
         assert_ne!(rounded("0.3000001"), rounded("0.3"));
+    }
+
+    /// Values of another number of nodes, or holding a NaN (a node not computed), are not
+    /// taken: the table stays unstored, without block minima, and fills itself.
+    #[test]
+    fn values_that_do_not_fit_are_not_taken() {
+        let robot = Robot::panda().unwrap();
+        let [_, model] = with_and_without_margins(&robot);
+        let (p, &(i, j)) = model
+            .self_pairs
+            .iter()
+            .enumerate()
+            .find(|(p, _)| model.tables[*p].is_some())
+            .unwrap();
+        let s = model.self_shared[p];
+        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
+        let (a, b) = (&model.bodies[i], &model.bodies[j]);
+        let make = || PairTable::for_pair(&robot, a, b, beyond, 0.0).unwrap();
+        let n = make().len();
+        let mut nan = vec![0.01; n];
+        nan[n / 2] = f32::NAN;
+        for values in [vec![0.01; n - 1], nan] {
+            let mut table = make();
+            table.take_values(&values);
+            assert!(!table.stored() && table.minima.is_none() && table.values().is_none());
+        }
+        let mut table = make();
+        table.take_values(&vec![0.01; n]);
+        assert!(table.stored() && table.minima.is_some());
     }
 }
