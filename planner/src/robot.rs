@@ -34,6 +34,11 @@ const PANDA_TABLES: &[u8] = include_bytes!("../../robots/panda/self_tables.bin")
 /// The file of a robot folder that holds its self-collision table values.
 pub const STORED_TABLES_FILE: &str = "self_tables.bin";
 
+/// The tables stored in `bytes`, read from `path` (named in the error).
+fn stored_tables(bytes: &[u8], path: std::path::PathBuf) -> Result<StoredTables, RobotError> {
+    StoredTables::parse(bytes).map_err(|source| RobotError::StoredTables { path, source })
+}
+
 /// The Panda's meshes, embedded, by their path in `robots/panda`.
 const PANDA_MESHES: EmbeddedFiles = &[
     panda_mesh!("meshes/robot_arms/fer/collision/link0.stl"),
@@ -174,11 +179,10 @@ impl Robot {
             Some(PANDA_MESHES),
             GripperCheck::Simulated,
         )?;
-        robot.stored_tables =
-            StoredTables::parse(PANDA_TABLES).map_err(|source| RobotError::StoredTables {
-                path: Path::new("robots/panda").join(STORED_TABLES_FILE),
-                source,
-            })?;
+        robot.stored_tables = stored_tables(
+            PANDA_TABLES,
+            Path::new("robots/panda").join(STORED_TABLES_FILE),
+        )?;
         Ok(robot)
     }
 
@@ -225,11 +229,7 @@ impl Robot {
                 path: tables_path.clone(),
                 source,
             })?;
-            robot.stored_tables =
-                StoredTables::parse(&bytes).map_err(|source| RobotError::StoredTables {
-                    path: tables_path,
-                    source,
-                })?;
+            robot.stored_tables = stored_tables(&bytes, tables_path)?;
         }
         Ok(robot)
     }
