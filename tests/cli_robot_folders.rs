@@ -159,10 +159,25 @@ fn a_folder_reads_the_tables_written_for_it_and_refuses_a_corrupt_file() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// The built-in Panda's tables go to a file named with --output.
+/// The built-in Panda's tables go to a file named with --output, and are computed by at
+/// least one thread (nothing is written otherwise).
 #[test]
-fn the_built_in_robots_tables_need_an_output_file() {
+fn the_built_in_robots_tables_need_an_output_file_and_a_thread() {
     let out = akl(&["robot", "tables"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--output"), "{}", stderr(&out));
+    let dir = scratch("tables-no-thread");
+    let file = dir.join("self_tables.bin");
+    let out = akl(&[
+        "robot",
+        "tables",
+        "-o",
+        file.to_str().unwrap(),
+        "--jobs",
+        "0",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--jobs"), "{}", stderr(&out));
+    assert!(!file.exists());
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -34,11 +34,7 @@ pub(super) fn run(
             ))
         }
     };
-    if jobs == Some(0) {
-        return Err(CliError::input("--jobs: at least 1"));
-    }
-    let threads =
-        jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let threads = super::execute::jobs(jobs)?;
     let robot = load(arg)?;
     let model = RobotCollision::new(&robot);
     let started = Instant::now();
