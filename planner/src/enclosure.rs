@@ -58,11 +58,8 @@ pub(crate) fn enclose_within(meshes: &[&LinkMesh], tolerance: f64) -> Option<Lin
         .collect();
     // The border: how far the furthest vertex of any mesh lies outside the hull, plus what
     // single precision may lose.
-    let all: Vec<Point3<f64>> = meshes
-        .iter()
-        .flat_map(|m| m.mesh.vertices.iter().copied())
-        .collect();
-    let border = furthest_outside(&all, &faces).map_or(0.0, |(_, d)| d) + 1e-6;
+    let border =
+        furthest_outside(&distinct_vertices(meshes), &faces).map_or(0.0, |(_, d)| d) + 1e-6;
     // The culling capsule holds the hull's vertices, then grows by the border.
     let capsule = akl_mesh::enclosing_capsules(&subdivided(faces.iter().copied(), MAX_EDGE), 1)
         .into_iter()
@@ -219,6 +216,27 @@ fn furthest_outside(points: &[Point3<f64>], faces: &[[Point3<f64>; 3]]) -> Optio
         }
     }
     furthest
+}
+
+/// Every vertex of `meshes` once: mesh files repeat a vertex for each triangle it
+/// belongs to, and measuring each copy against the hull was two fifths of loading a robot.
+fn distinct_vertices(meshes: &[&LinkMesh]) -> Vec<Point3<f64>> {
+    let mut keys: Vec<[u64; 3]> = meshes
+        .iter()
+        .flat_map(|m| &m.mesh.vertices)
+        .map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.iter()
+        .map(|k| {
+            Point3::new(
+                f64::from_bits(k[0]),
+                f64::from_bits(k[1]),
+                f64::from_bits(k[2]),
+            )
+        })
+        .collect()
 }
 
 /// How far `p` lies outside the convex polytope bounded by `faces` (0 inside).
@@ -450,6 +468,28 @@ mod tests {
             [3, 7, 5],
         ];
         mesh(role, vertices, triangles)
+    }
+
+    #[test]
+    fn each_vertex_is_measured_once() {
+        let solid = box_mesh(MeshRole::Collision, [0.05, 0.03, 0.1], [0.0; 3]);
+        // The same box as a triangle soup, every corner repeated for each of its triangles.
+        let corners = &solid.mesh.vertices;
+        let soup: Vec<Point3<f64>> = solid
+            .mesh
+            .triangles
+            .iter()
+            .flat_map(|t| t.map(|i| corners[i as usize]))
+            .collect();
+        let n = soup.len() as u32;
+        let triangles = (0..n / 3).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let soup = mesh(MeshRole::Visual, soup, triangles);
+        let key = |p: &Point3<f64>| [p.x, p.y, p.z].map(f64::to_bits);
+        let mut distinct = distinct_vertices(&[&solid, &soup]);
+        let mut expected = corners.clone();
+        distinct.sort_by_key(key);
+        expected.sort_by_key(key);
+        assert_eq!(distinct, expected);
     }
 
     #[test]
