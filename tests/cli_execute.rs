@@ -236,7 +236,7 @@ fn bad_input_exits_2_and_writes_nothing() {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join(truth("inspection"));
     let spec = spec.to_str().unwrap();
     std::fs::write(dir.join("broken.json"), "{\"akl_spec\": 1, \"keyf").unwrap();
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 11] = [
         (
             &["execute", "missing.json", "--task", "inspection"],
             "missing.json",
@@ -279,6 +279,7 @@ fn bad_input_exits_2_and_writes_nothing() {
             "is a folder",
         ),
         (&["demo", "--trials", "0", "--out", "out"], "--trials"),
+        (&["demo", "--jobs", "0", "--out", "out"], "--jobs"),
     ];
     for (args, named) in cases {
         let o = akl_in(&dir, args);

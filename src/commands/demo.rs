@@ -1,7 +1,7 @@
 //! `akl demo`: teach with the simulated teacher, learn with AKL, execute with randomized
 //! objects; each stage's result and files.
 
-use super::execute::{execute, print_executed, verdict, Execution};
+use super::execute::{execute, jobs, print_executed, verdict, Execution};
 use super::robot::load as load_robot;
 use super::spec::keyframe_table;
 use super::teach::{
@@ -18,9 +18,8 @@ pub(super) fn run(args: DemoArgs) -> CliResult {
     if args.trials == 0 {
         return Err(CliError::input("--trials: needs at least one trial"));
     }
-    if args.jobs == Some(0) {
-        return Err(CliError::input("--jobs: needs at least one"));
-    }
+    // Refused before any teaching is done.
+    jobs(args.jobs)?;
     if args.out.exists() && !args.out.is_dir() {
         return Err(CliError::input(format!(
             "{}: --out must be a folder",
