@@ -516,6 +516,20 @@ mod tests {
             .collect()
     }
 
+    /// A new table, nothing stored in it, for the first of `model`'s pairs that has one, its
+    /// elements grown by `grow`: made as the model makes its own.
+    fn new_table_for_first_pair(robot: &Robot, model: &RobotCollision, grow: f64) -> PairTable {
+        let (p, &(i, j)) = model
+            .self_pairs
+            .iter()
+            .enumerate()
+            .find(|(p, _)| model.tables[*p].is_some())
+            .unwrap();
+        let s = model.self_shared[p];
+        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
+        PairTable::for_pair(robot, &model.bodies[i], &model.bodies[j], beyond, grow).unwrap()
+    }
+
     /// The robot's model with its margins, and one whose elements are not grown at all (as
     /// `akl robot check --margin 0` builds).
     fn with_and_without_margins(robot: &Robot) -> [RobotCollision; 2] {
@@ -696,15 +710,7 @@ mod tests {
         let robot = Robot::panda().unwrap();
         let [_, model] = with_and_without_margins(&robot);
         let (t, a, b) = tabled(&model)[0];
-        let (p, &(i, j)) = model
-            .self_pairs
-            .iter()
-            .enumerate()
-            .find(|(p, _)| model.tables[*p].is_some())
-            .unwrap();
-        let s = model.self_shared[p];
-        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
-        let fresh = PairTable::for_pair(&robot, a, b, beyond, t.grow).unwrap();
+        let fresh = new_table_for_first_pair(&robot, &model, t.grow);
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..50 {
             let q = random_q(&robot, &mut rng);
@@ -872,16 +878,7 @@ mod tests {
     fn values_that_do_not_fit_are_not_taken() {
         let robot = Robot::panda().unwrap();
         let [_, model] = with_and_without_margins(&robot);
-        let (p, &(i, j)) = model
-            .self_pairs
-            .iter()
-            .enumerate()
-            .find(|(p, _)| model.tables[*p].is_some())
-            .unwrap();
-        let s = model.self_shared[p];
-        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
-        let (a, b) = (&model.bodies[i], &model.bodies[j]);
-        let make = || PairTable::for_pair(&robot, a, b, beyond, 0.0).unwrap();
+        let make = || new_table_for_first_pair(&robot, &model, 0.0);
         let n = make().len();
         let mut nan = vec![0.01; n];
         nan[n / 2] = f32::NAN;
