@@ -416,11 +416,8 @@ mod tests {
         world
     }
 
-    /// A sample beyond a node's dynamic domain is turned away unchecked; an extension that
-    /// meets an obstacle gives its node the domain's radius, and each later failure narrows it
-    /// down to the least radius.
-    #[test]
-    fn the_dynamic_domain_turns_far_samples_away_and_narrows_on_failure() {
+    /// Runs `test` with the Panda in [`beside_a_wall`], hand open, nothing held.
+    fn beside_the_wall(test: impl FnOnce(&Robot, &Space)) {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
         let scene = Scene::new(&beside_a_wall(), &[]);
@@ -432,61 +429,71 @@ mod tests {
             held: None,
             allow: &allow,
         };
-        let domain = DynamicDomain {
-            radius: 1.5,
-            alpha: 0.25,
-            min_radius: 1.0,
-        };
-        let ready = robot.ready().to_vec();
-        let mut tree = Tree::new(robot.dof());
-        tree.add(&ready, NO_PARENT);
-        let mut screening = Screening::default();
-        let mut step = |tree: &mut Tree, target: &[f64], domain: Option<&DynamicDomain>| {
-            extend(tree, target, &space, &mut screening, 2.0, domain, None)
-        };
-        // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
-        let mut blocked = ready.clone();
-        blocked[0] += 1.2;
-        assert!(matches!(
-            step(&mut tree, &blocked, Some(&domain)),
-            Extend::Trapped
-        ));
-        assert_eq!(tree.radii[0], 1.5);
-        assert!(matches!(
-            step(&mut tree, &blocked, Some(&domain)),
-            Extend::Trapped
-        ));
-        assert_eq!(tree.radii[0], 1.125);
-        // Narrowed no further than the least radius (a target within the domain).
-        let mut blocked_nearer = ready.clone();
-        blocked_nearer[0] += 1.1;
-        assert!(matches!(
-            step(&mut tree, &blocked_nearer, Some(&domain)),
-            Extend::Trapped
-        ));
-        assert_eq!(tree.radii[0], 1.0);
-        // Farther than the radius: turned away, nothing added.
-        let mut far = ready.clone();
-        far[0] -= 1.1;
-        assert!(matches!(
-            step(&mut tree, &far, Some(&domain)),
-            Extend::Outside
-        ));
-        assert_eq!(tree.len(), 1);
-        // Within it and free: the node grows and its domain widens.
-        let mut near = ready.clone();
-        near[0] -= 0.5;
-        assert!(matches!(
-            step(&mut tree, &near, Some(&domain)),
-            Extend::Reached(1)
-        ));
-        assert_eq!(tree.radii[0], 1.25);
-        assert!(tree.radii[1].is_infinite());
-        // Without a domain nothing is turned away.
-        assert!(matches!(
-            step(&mut tree, &far, None),
-            Extend::Reached(2) | Extend::Advanced(2)
-        ));
+        test(&robot, &space);
+    }
+
+    /// A sample beyond a node's dynamic domain is turned away unchecked; an extension that
+    /// meets an obstacle gives its node the domain's radius, and each later failure narrows it
+    /// down to the least radius.
+    #[test]
+    fn the_dynamic_domain_turns_far_samples_away_and_narrows_on_failure() {
+        beside_the_wall(|robot, space| {
+            let domain = DynamicDomain {
+                radius: 1.5,
+                alpha: 0.25,
+                min_radius: 1.0,
+            };
+            let ready = robot.ready().to_vec();
+            let mut tree = Tree::new(robot.dof());
+            tree.add(&ready, NO_PARENT);
+            let mut screening = Screening::default();
+            let mut step = |tree: &mut Tree, target: &[f64], domain: Option<&DynamicDomain>| {
+                extend(tree, target, space, &mut screening, 2.0, domain, None)
+            };
+            // Turning joint 1 by 1.2 rad sweeps the arm through the wall.
+            let mut blocked = ready.clone();
+            blocked[0] += 1.2;
+            assert!(matches!(
+                step(&mut tree, &blocked, Some(&domain)),
+                Extend::Trapped
+            ));
+            assert_eq!(tree.radii[0], 1.5);
+            assert!(matches!(
+                step(&mut tree, &blocked, Some(&domain)),
+                Extend::Trapped
+            ));
+            assert_eq!(tree.radii[0], 1.125);
+            // Narrowed no further than the least radius (a target within the domain).
+            let mut blocked_nearer = ready.clone();
+            blocked_nearer[0] += 1.1;
+            assert!(matches!(
+                step(&mut tree, &blocked_nearer, Some(&domain)),
+                Extend::Trapped
+            ));
+            assert_eq!(tree.radii[0], 1.0);
+            // Farther than the radius: turned away, nothing added.
+            let mut far = ready.clone();
+            far[0] -= 1.1;
+            assert!(matches!(
+                step(&mut tree, &far, Some(&domain)),
+                Extend::Outside
+            ));
+            assert_eq!(tree.len(), 1);
+            // Within it and free: the node grows and its domain widens.
+            let mut near = ready.clone();
+            near[0] -= 0.5;
+            assert!(matches!(
+                step(&mut tree, &near, Some(&domain)),
+                Extend::Reached(1)
+            ));
+            assert_eq!(tree.radii[0], 1.25);
+            assert!(tree.radii[1].is_infinite());
+            // Without a domain nothing is turned away.
+            assert!(matches!(
+                step(&mut tree, &far, None),
+                Extend::Reached(2) | Extend::Advanced(2)
+            ));
+        });
     }
 
     /// Extensions from a node that meet an obstacle shrink that node's later steps: after
@@ -494,62 +501,53 @@ mod tests {
     /// new node starts with the whole range.
     #[test]
     fn failures_shrink_a_nodes_step() {
-        let robot = Robot::panda().unwrap();
-        let model = RobotCollision::new(&robot);
-        let scene = Scene::new(&beside_a_wall(), &[]);
-        let checker = Checker::new(&robot, &model, &scene);
-        let allow = Allowances::default();
-        let space = Space {
-            checker: &checker,
-            width: robot.open_width(),
-            held: None,
-            allow: &allow,
-        };
-        let ready = robot.ready().to_vec();
-        // Turning joint 1 by 1.2 rad sweeps the arm through the wall; the other way is free.
-        let mut blocked = ready.clone();
-        blocked[0] += 1.2;
-        let mut free = ready.clone();
-        free[0] -= 1.5;
-        let grow = |halve_after: Option<u32>| {
-            let mut tree = Tree::new(robot.dof());
-            tree.add(&ready, NO_PARENT);
-            let mut screening = Screening::default();
-            for _ in 0..2 {
-                let blocked_step = extend(
+        beside_the_wall(|robot, space| {
+            let ready = robot.ready().to_vec();
+            // Turning joint 1 by 1.2 rad sweeps the arm through the wall; the other way is free.
+            let mut blocked = ready.clone();
+            blocked[0] += 1.2;
+            let mut free = ready.clone();
+            free[0] -= 1.5;
+            let grow = |halve_after: Option<u32>| {
+                let mut tree = Tree::new(robot.dof());
+                tree.add(&ready, NO_PARENT);
+                let mut screening = Screening::default();
+                for _ in 0..2 {
+                    let blocked_step = extend(
+                        &mut tree,
+                        &blocked,
+                        space,
+                        &mut screening,
+                        2.0,
+                        None,
+                        halve_after,
+                    );
+                    assert!(matches!(blocked_step, Extend::Trapped));
+                }
+                let outcome = extend(
                     &mut tree,
-                    &blocked,
-                    &space,
+                    &free,
+                    space,
                     &mut screening,
                     2.0,
                     None,
                     halve_after,
                 );
-                assert!(matches!(blocked_step, Extend::Trapped));
-            }
-            let outcome = extend(
-                &mut tree,
-                &free,
-                &space,
-                &mut screening,
-                2.0,
-                None,
-                halve_after,
-            );
-            (tree, outcome)
-        };
-        // Two failures with halving after two: a step of 1 rad towards the free target.
-        let (mut tree, outcome) = grow(Some(2));
-        assert!(matches!(outcome, Extend::Advanced(1)));
-        assert_eq!(tree.failures[0], 2);
-        assert!((distance(tree.node(0), tree.node(1)) - 1.0).abs() < 1e-12);
-        assert_eq!(tree.step(1, 2.0, Some(2)), 2.0);
-        tree.failures[0] = 100;
-        assert_eq!(tree.step(0, 2.0, Some(2)), MIN_STEP);
-        // Without halving the whole range: the target is reached.
-        let (tree, outcome) = grow(None);
-        assert!(matches!(outcome, Extend::Reached(1)));
-        assert_eq!(tree.failures[0], 0);
+                (tree, outcome)
+            };
+            // Two failures with halving after two: a step of 1 rad towards the free target.
+            let (mut tree, outcome) = grow(Some(2));
+            assert!(matches!(outcome, Extend::Advanced(1)));
+            assert_eq!(tree.failures[0], 2);
+            assert!((distance(tree.node(0), tree.node(1)) - 1.0).abs() < 1e-12);
+            assert_eq!(tree.step(1, 2.0, Some(2)), 2.0);
+            tree.failures[0] = 100;
+            assert_eq!(tree.step(0, 2.0, Some(2)), MIN_STEP);
+            // Without halving the whole range: the target is reached.
+            let (tree, outcome) = grow(None);
+            assert!(matches!(outcome, Extend::Reached(1)));
+            assert_eq!(tree.failures[0], 0);
+        });
     }
 
     /// Screening waits until more than half the edges tried are blocked, then follows their
