@@ -8,7 +8,7 @@ use super::model::{Body, Group, RobotCollision};
 use super::pair_table::Tabled;
 use super::scene::{Obstacle, Scene};
 use super::spheres::{gap_between, Placement};
-use super::sweep::{Proof, Sweep};
+use super::sweep::{Motion, Proof, Sweep, Velocity};
 use crate::contact_rules::Allowances;
 use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
@@ -21,6 +21,9 @@ use std::collections::VecDeque;
 
 /// Links whose poses a check keeps on the stack; robots with more spill to the heap.
 const INLINE_LINKS: usize = 32;
+
+/// Joints of one chain whose turns a motion bound keeps on the stack.
+const INLINE_CHAIN: usize = 16;
 
 /// Collision elements whose placements a check keeps on the stack; more spill to the heap.
 const INLINE_BODIES: usize = 64;
@@ -97,12 +100,13 @@ impl<'a> Checker<'a> {
     }
 
     /// Writes into `sweep.bounds` the motion bounds of every chain for the joint motion
-    /// `sweep.half` about the configuration whose link poses are `poses`.
+    /// `sweep.step` (either way) about the configuration whose link poses are `poses`.
     ///
-    /// Going from the last joint of a chain to the first, with D the bound through the joints
-    /// beyond joint j: the point stays within r + D of joint j's axis, r being its distance
-    /// at the configuration (the element's centre's distance plus the element's extent), so
-    /// turning joint j by Δ adds (r + D)·|Δ|; sliding it adds |Δ|.
+    /// Each slot takes the smaller, over the whole stretch, of two bounds (module
+    /// documentation): the sum over the joints of each one's turn times the element's reach
+    /// from its axis, and the element's velocity at the check (the joints' motions added as
+    /// vectors, so that turns that carry it opposite ways cancel) plus what that velocity can
+    /// change along the stretch.
     pub(super) fn sweep_bounds(
         &self,
         poses: &[Pose],
@@ -125,19 +129,39 @@ impl<'a> Checker<'a> {
                     None => (tcp.translation.vector, 0.0),
                 },
             };
+            // How far the chain's revolute joints up to and including each one turn: the
+            // most the frame of each joint's axis rotates along the stretch.
+            let mut rotated: SmallVec<[f64; INLINE_CHAIN]> = SmallVec::new();
+            let mut total = 0.0;
+            for mover in chain {
+                if mover.axis.is_some() {
+                    total += (mover.scale * sweep.step[mover.index]).abs();
+                }
+                rotated.push(total);
+            }
             let slots = &mut sweep.bounds[model.offsets[k]..model.offsets[k + 1]];
-            let mut d = 0.0;
-            slots[chain.len()] = d;
+            let mut velocity = Velocity::default();
+            let mut beyond = Motion::default();
+            slots[chain.len()] = beyond;
             for (m, mover) in chain.iter().enumerate().rev() {
-                let turn = mover.scale.abs() * sweep.half[mover.index];
-                d += if mover.axis.is_some() {
-                    let origin = poses[mover.link].translation.vector;
-                    let r = (centre - origin).cross(&axes[mover.link]).norm() + extent;
-                    (r + d) * turn
+                let turn = mover.scale * sweep.step[mover.index];
+                let reached = if mover.axis.is_some() {
+                    let axis = axes[mover.link];
+                    let lever = axis.cross(&(centre - poses[mover.link].translation.vector));
+                    let reach = lever.norm() + extent;
+                    velocity.turn(turn, &lever, &axis, reach, rotated[m], beyond);
+                    beyond.turned(reach, turn.abs())
                 } else {
-                    turn
+                    velocity.slide(turn.abs(), rotated[m]);
+                    beyond.slid(turn.abs())
                 };
-                slots[m] = d;
+                let carried = velocity.motion(extent);
+                beyond = if carried.whole() < reached.whole() {
+                    carried
+                } else {
+                    reached
+                };
+                slots[m] = beyond;
             }
         }
     }
@@ -159,13 +183,14 @@ impl<'a> Checker<'a> {
             .map(|body| placed(body, &poses[body.link]))
             .collect();
         let mut sweep = Sweep::new(self.model, a.len());
-        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
-            *h = 0.5 * (y - x).abs();
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            sweep.half[i] = 0.5 * (y - x).abs();
+            sweep.step[i] = 0.5 * (y - x);
         }
         self.sweep_bounds(&poses, &placed_bodies, held, &mut sweep);
         let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
         (0..last)
-            .map(|k| sweep.bounds[self.model.offsets[k]])
+            .map(|k| sweep.bounds[self.model.offsets[k]].whole())
             .fold(0.0, f64::max)
             * 2.0
     }
@@ -249,7 +274,7 @@ impl<'a> Checker<'a> {
             let reach = ba.self_radius + bb.self_radius;
             let balls = reach + ba.half_segment + bb.half_segment;
             let centres = 0.5 * ((pa.a + pa.b) - (pb.a + pb.b));
-            let moved = proof.as_ref().map_or(0.0, |pr| {
+            let moved = proof.as_ref().map_or(Motion::default(), |pr| {
                 let s = model.self_shared[p];
                 pr.moved(i, s) + pr.moved(j, s)
             });
@@ -306,7 +331,9 @@ impl<'a> Checker<'a> {
         let mut nearest: SmallVec<[Near; 16]> = SmallVec::new();
         for (k, (b, p)) in bodies.iter().zip(placed_bodies).enumerate() {
             let slack = 0.5 * m.world(b.group);
-            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(k, 0));
+            let moved = proof
+                .as_ref()
+                .map_or(Motion::default(), |pr| pr.moved(k, 0));
             let bounds = bounding_box(p, b.world_radius);
             let role = model.role(b);
             let mut place: Option<Placement> = None;
@@ -340,6 +367,7 @@ impl<'a> Checker<'a> {
                             moved,
                             slack,
                             gap,
+                            share: moved.share_within(slack + gap),
                         });
                     }
                     continue;
@@ -360,7 +388,9 @@ impl<'a> Checker<'a> {
             };
             let extent = h.radius - h.in_tcp.translation.vector.norm();
             let held_chain = bodies.len();
-            let moved = proof.as_ref().map_or(0.0, |pr| pr.moved(held_chain, 0));
+            let moved = proof
+                .as_ref()
+                .map_or(Motion::default(), |pr| pr.moved(held_chain, 0));
             let bounds = bounding_box(&ball, extent);
             for o in &self.scene.obstacles {
                 if contact_rules::held_may_touch(&o.name, allow) {
@@ -391,7 +421,7 @@ impl<'a> Checker<'a> {
                     continue;
                 }
                 let reach = arm_extent + b.self_radius;
-                let moved = proof.as_ref().map_or(0.0, |pr| {
+                let moved = proof.as_ref().map_or(Motion::default(), |pr| {
                     let s = model.tcp_shared[k];
                     pr.moved(held_chain, s) + pr.moved(k, s)
                 });
@@ -412,9 +442,7 @@ impl<'a> Checker<'a> {
         }
         if let Some(pr) = proof.as_mut() {
             // The least promising first: once one is settled by its bound, so are the rest.
-            nearest.sort_unstable_by(|x, y| {
-                ((x.slack + x.gap) * y.moved).total_cmp(&((y.slack + y.gap) * x.moved))
-            });
+            nearest.sort_unstable_by(|x, y| x.share.total_cmp(&y.share));
             for n in &nearest {
                 if pr.settled(n.moved, n.slack + n.gap) {
                     break;
@@ -480,8 +508,9 @@ impl<'a> Checker<'a> {
             return Some(hit);
         }
         let mut sweep = Sweep::new(self.model, a.len());
-        for (h, (x, y)) in sweep.half.iter_mut().zip(a.iter().zip(b)) {
-            *h = (y - x).abs();
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            sweep.half[i] = (y - x).abs();
+            sweep.step[i] = y - x;
         }
         // Each end proves a stretch into the edge (the bound covers the whole edge about it).
         let mut ends = [0.0; 2];
@@ -501,7 +530,8 @@ impl<'a> Checker<'a> {
             let half = 0.5 * (hi - lo);
             for i in 0..a.len() {
                 q[i] = a[i] + mid * (b[i] - a[i]);
-                sweep.half[i] = half * (b[i] - a[i]).abs();
+                sweep.step[i] = half * (b[i] - a[i]);
+                sweep.half[i] = sweep.step[i].abs();
             }
             // Within the joint limits: the ends are, and the limits are a box.
             let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
@@ -564,9 +594,11 @@ fn bisection_point(k: usize) -> f64 {
 struct Near {
     body: usize,
     obstacle: usize,
-    moved: f64,
+    moved: Motion,
     slack: f64,
     gap: f64,
+    /// The share of the stretch that `gap` proves ([`Motion::share_within`]).
+    share: f64,
 }
 
 /// A lower bound on the distance between two elements grown by half the self margin, from
@@ -590,7 +622,7 @@ pub(super) fn clear_of(
     bounds: &[Vector3<f64>; 2],
     o: &Obstacle,
     proof: Option<&mut Proof>,
-    moved: f64,
+    moved: Motion,
     slack: f64,
 ) -> bool {
     let Some(pr) = proof else {

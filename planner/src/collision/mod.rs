@@ -12,10 +12,16 @@
 //! following sense: every clearance keeps at least half its margin everywhere along an edge
 //! reported free. Each check on the edge proves a stretch around it free, as long as the
 //! stretch is short enough that no point moves further than the clearance found at the
-//! check plus half the margin. How far points move is bounded per collision element by
-//! `Checker::sweep_bound`: turning joint j by Δ moves a point at distance r from its axis by
-//! at most r·|Δ|, where r is measured at the check and may grow along the stretch by what the
-//! joints beyond j move the point.
+//! check plus half the margin. How far points move is bounded per collision element
+//! (`Checker::sweep_bounds`) by the smaller of two bounds, each kept as a function of the share
+//! of the stretch taken (`sweep::Motion`: a first-order part and the terms beyond it, which
+//! shrink quadratically when a proof shortens the stretch): turning joint j by Δ moves a point
+//! at distance r from its axis by at most r·|Δ|, where r is measured at the check and may grow
+//! along the stretch by what the joints beyond j move the point; or, with the joints' motions
+//! added as vectors (turns that carry the element opposite ways cancel), the element's
+//! velocity at the check plus how far the rotation of the joints' axes and the motion of the
+//! joints beyond can turn that velocity over the stretch (`sweep::Velocity`). A test moves
+//! points of every element through the forward kinematics and holds them to the bound.
 //!
 //! Exact (parry) queries are asked only where cheaper bounds cannot settle a pair: bounding
 //! boxes, segments, and balls that hold each element (`spheres`, property-tested never to

@@ -1,23 +1,165 @@
 //! The proof that a stretch of a joint-space edge is free: how far the bodies move along it
-//! ([`Sweep`]) against the clearances found at a check ([`Proof`]).
+//! ([`Sweep`], [`Motion`]) against the clearances found at a check ([`Proof`]).
 
 use super::model::RobotCollision;
+use akl_tsr::nalgebra::Vector3;
+use std::ops::Add;
+
+/// A bound on how far a point moves over a stretch, kept as a function of the share f of
+/// the stretch (0 ≤ f ≤ 1) that is taken: at most `linear`·f + `higher`·f².
+///
+/// Turning a joint moves a point by its distance from the axis times the turn, and that
+/// distance grows with what the joints beyond move the point: the bound is a polynomial in f
+/// with non-negative coefficients, whose first-order part is `linear` and whose terms of
+/// second order and above, at most their sum times f² for f ≤ 1, are `higher`. Taking a
+/// share of a stretch shrinks its second-order part quadratically, so a proof that shortens
+/// the stretch to fit a clearance proves more than the whole stretch's bound scaled down.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Motion {
+    /// The first-order part: the sum of each joint's turn times the point's distance from
+    /// its axis at the check (and each slide).
+    pub(super) linear: f64,
+    /// The terms of second order and above at f = 1.
+    pub(super) higher: f64,
+}
+
+impl Motion {
+    /// The bound over the whole stretch.
+    pub(super) fn whole(self) -> f64 {
+        self.linear + self.higher
+    }
+
+    /// The bound over the share `f` (0 ≤ f ≤ 1) of the stretch.
+    pub(super) fn at(self, f: f64) -> f64 {
+        f * (self.linear + f * self.higher)
+    }
+
+    /// The largest share of the stretch over which the motion stays within `slack` (may
+    /// exceed 1; 0 if `slack` is not positive).
+    pub(super) fn share_within(self, slack: f64) -> f64 {
+        if slack <= 0.0 {
+            return 0.0;
+        }
+        // The positive root of higher·f² + linear·f − slack, in the form that keeps its
+        // precision when `higher` is small.
+        let root = (self.linear * self.linear + 4.0 * self.higher * slack).sqrt();
+        let denominator = self.linear + root;
+        if denominator > 0.0 {
+            2.0 * slack / denominator
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The motion of a point carried further by `turn` (radians, times the joint's scale) of
+    /// a revolute joint whose axis is `reach` from the point at the check.
+    pub(super) fn turned(self, reach: f64, turn: f64) -> Motion {
+        Motion {
+            linear: self.linear + reach * turn,
+            higher: self.higher + turn * (self.linear + self.higher),
+        }
+    }
+
+    /// The motion of a point carried further by a slide of `distance` metres.
+    pub(super) fn slid(self, distance: f64) -> Motion {
+        Motion {
+            linear: self.linear + distance,
+            higher: self.higher,
+        }
+    }
+}
+
+/// The second bound of [`Checker::sweep_bounds`](super::Checker), built from the last joint
+/// of a chain to the first: the element's velocity at the check through those joints (a point
+/// of the element moves at first by `linear`·f when the stretch's share f is taken, `linear`
+/// being the speed of the element's centre plus its turning rate times its extent), and how
+/// far its motion can stray from that straight start over the stretch.
+///
+/// Joint j contributes Δⱼ·(aⱼ × (p − oⱼ)) to the velocity of a point p. Along the stretch
+/// that vector changes: the rotation of every joint up to j turns it (by at most their turns
+/// times its length, which is the reach r from the axis plus what the joints beyond move the
+/// point, D(s)), and the joints beyond move p (by D(s)). Integrated over the share f, with
+/// D(s) ≤ L·s + Q·s² from the bound beyond j, joint j's part of the stray is at most
+/// f²·|Δⱼ|·(T·(r/2 + L/3 + Q/4) + L/2 + Q/3), T being the turns up to j; a slide's is
+/// f²·|Δⱼ|·T/2.
+#[derive(Debug, Default)]
+pub(super) struct Velocity {
+    /// The velocity of the element's centre, per unit share of the stretch.
+    centre: Vector3<f64>,
+    /// The element's rate of turning.
+    spin: Vector3<f64>,
+    /// The slides' part, summed as lengths.
+    slid: f64,
+    /// The stray from the straight start, at share 1.
+    stray: f64,
+}
+
+impl Velocity {
+    /// Adds a revolute joint turning by `turn` about the world axis `axis`, `lever` being
+    /// axis × (centre − a point of the axis), `reach` the element's furthest distance from
+    /// the axis, `rotated` the turns of the chain's joints up to and including this one, and
+    /// `beyond` the motion bound through the joints after it.
+    pub(super) fn turn(
+        &mut self,
+        turn: f64,
+        lever: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        reach: f64,
+        rotated: f64,
+        beyond: Motion,
+    ) {
+        self.centre += turn * lever;
+        self.spin += turn * axis;
+        let (l, q) = (beyond.linear, beyond.higher);
+        self.stray +=
+            turn.abs() * (rotated * (0.5 * reach + l / 3.0 + 0.25 * q) + 0.5 * l + q / 3.0);
+    }
+
+    /// Adds a prismatic joint sliding by `distance`, with `rotated` the turns of the
+    /// chain's revolute joints before it.
+    pub(super) fn slide(&mut self, distance: f64, rotated: f64) {
+        self.slid += distance;
+        self.stray += 0.5 * distance * rotated;
+    }
+
+    /// The motion bound of a point within `extent` of the centre.
+    pub(super) fn motion(&self, extent: f64) -> Motion {
+        Motion {
+            linear: self.centre.norm() + self.spin.norm() * extent + self.slid,
+            higher: self.stray,
+        }
+    }
+}
+
+impl Add for Motion {
+    type Output = Motion;
+    fn add(self, other: Motion) -> Motion {
+        Motion {
+            linear: self.linear + other.linear,
+            higher: self.higher + other.higher,
+        }
+    }
+}
 
 /// Work space of an edge check: the joint motion of the stretch being proved free and the
 /// motion bounds derived from it.
 pub(super) struct Sweep {
     /// How far each arm joint turns or slides from the check to either end of the stretch.
     pub(super) half: Vec<f64>,
+    /// The joint motion from the check to one end of the stretch (to the other it is the
+    /// opposite): `half` with signs.
+    pub(super) step: Vec<f64>,
     /// For each chain k of the model, `bounds[offsets[k] + m]` bounds how far any point of
     /// its element moves through the joints `m..` of the chain (0 past the last one).
-    pub(super) bounds: Vec<f64>,
+    pub(super) bounds: Vec<Motion>,
 }
 
 impl Sweep {
     pub(super) fn new(model: &RobotCollision, dof: usize) -> Sweep {
         Sweep {
             half: vec![0.0; dof],
-            bounds: vec![0.0; model.offsets.last().copied().unwrap_or(0)],
+            step: vec![0.0; dof],
+            bounds: vec![Motion::default(); model.offsets.last().copied().unwrap_or(0)],
         }
     }
 }
@@ -33,34 +175,34 @@ pub(super) struct Proof<'s> {
 
 impl Proof<'_> {
     /// Bound on how far chain `k` moves through its joints from `from` on.
-    pub(super) fn moved(&self, k: usize, from: usize) -> f64 {
+    pub(super) fn moved(&self, k: usize, from: usize) -> Motion {
         self.sweep.bounds[self.offsets[k] + from]
     }
 
     /// The clearance beyond which an element moving `moved` with `slack` to spare shortens
     /// nothing: a distance query need not be exact past it.
-    pub(super) fn useful_clearance(&self, moved: f64, slack: f64) -> f64 {
-        moved * self.fraction - slack
+    pub(super) fn useful_clearance(&self, moved: Motion, slack: f64) -> f64 {
+        moved.at(self.fraction) - slack
     }
 
     /// Whether a clearance larger than 0 would shorten nothing: an element moving `moved`
     /// with `slack` to spare is already within the current fraction.
-    pub(super) fn settled(&self, moved: f64, slack: f64) -> bool {
+    pub(super) fn settled(&self, moved: Motion, slack: f64) -> bool {
         self.useful_clearance(moved, slack) <= 0.0
     }
 
     /// [`Proof::settled`] for the clearance `slack + √distance_sq`, without the square root
     /// (checks take it for every element and object whose boxes are apart).
-    pub(super) fn settled_sq(&self, moved: f64, slack: f64, distance_sq: f64) -> bool {
+    pub(super) fn settled_sq(&self, moved: Motion, slack: f64, distance_sq: f64) -> bool {
         let useful = self.useful_clearance(moved, slack);
         useful <= 0.0 || distance_sq >= useful * useful
     }
 
     /// Limits the fraction to what `slack` (clearance plus half the margin) allows an element
     /// moving up to `moved` over the whole stretch.
-    pub(super) fn limit(&mut self, moved: f64, slack: f64) {
-        if moved * self.fraction > slack {
-            self.fraction = slack / moved;
+    pub(super) fn limit(&mut self, moved: Motion, slack: f64) {
+        if moved.at(self.fraction) > slack {
+            self.fraction = moved.share_within(slack).min(self.fraction);
         }
     }
 }
@@ -75,12 +217,14 @@ mod tests {
         /// whose clearance would shorten the stretch is never skipped.
         #[test]
         fn settling_on_a_squared_distance_decides_as_on_the_distance(
-            moved in 0.0..0.5f64,
+            linear in 0.0..0.5f64,
+            higher in 0.0..0.5f64,
             slack in -0.05..0.05f64,
             distance in 0.0..0.3f64,
             fraction in 0.0..1.0f64,
         ) {
-            let sweep = Sweep { half: Vec::new(), bounds: Vec::new() };
+            let moved = Motion { linear, higher };
+            let sweep = Sweep { half: Vec::new(), step: Vec::new(), bounds: Vec::new() };
             let proof = Proof { sweep: &sweep, offsets: &[], fraction };
             let exact = proof.settled(moved, slack + distance);
             let squared = proof.settled_sq(moved, slack, distance * distance);
@@ -89,6 +233,49 @@ mod tests {
             if (distance - useful).abs() > 1e-12 {
                 prop_assert_eq!(exact, squared);
             }
+        }
+
+        /// Over any share of a stretch, a chain's motion (each joint turning a point at most
+        /// its distance from the axis, grown by what the joints beyond move it, times the
+        /// joint's turn over that share) stays within the bound kept for the whole stretch.
+        #[test]
+        fn a_share_of_a_stretch_moves_within_the_bound(
+            joints in prop::collection::vec((0.0..1.0f64, 0.0..1.5f64, any::<bool>()), 0..9),
+            f in 0.0..=1.0f64,
+        ) {
+            let mut motion = Motion::default();
+            let mut share = 0.0;
+            for &(reach, turn, slides) in joints.iter().rev() {
+                let t = f * turn;
+                if slides {
+                    motion = motion.slid(turn);
+                    share += t;
+                } else {
+                    motion = motion.turned(reach, turn);
+                    share += (reach + share) * t;
+                }
+            }
+            prop_assert!(share <= motion.at(f) * (1.0 + 1e-12) + 1e-15);
+            if f == 1.0 {
+                prop_assert!((share - motion.whole()).abs() <= 1e-12 * share.max(1.0));
+            }
+        }
+
+        /// The share a clearance proves keeps the motion within it, and is never less than
+        /// the whole stretch's bound scaled down (the proof before this bound).
+        #[test]
+        fn a_limited_share_keeps_within_the_slack(
+            linear in 0.0..2.0f64,
+            higher in 0.0..2.0f64,
+            slack in 1e-4..0.2f64,
+        ) {
+            let moved = Motion { linear, higher };
+            let sweep = Sweep { half: Vec::new(), step: Vec::new(), bounds: Vec::new() };
+            let mut proof = Proof { sweep: &sweep, offsets: &[], fraction: 1.0 };
+            proof.limit(moved, slack);
+            prop_assert!(moved.at(proof.fraction) <= slack * (1.0 + 1e-12));
+            prop_assert!(proof.fraction >= (slack / moved.whole()).min(1.0) * (1.0 - 1e-12));
+            prop_assert!(proof.fraction <= 1.0);
         }
     }
 }

@@ -509,3 +509,76 @@ fn the_intersection_test_has_no_false_positives_near_contact() {
     }
     assert!(hits > 1000, "only {hits} placements intersect");
 }
+
+mod motion_bounds {
+    use super::super::sweep::Sweep;
+    use super::*;
+    use akl_scene::builtin;
+    use akl_tsr::nalgebra::{Point3, Vector3};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The motion bound of every chain, from every joint on, holds along the stretch: a point
+    /// within the element's extent of its centre, moved by the chain's joints from that one
+    /// on (the others held, as the frame before it is then fixed) by any share f of the
+    /// stretch either way, moves no further than the bound at f. Stretches of up to 1.5 rad
+    /// per joint, where the terms beyond the first order matter most.
+    #[test]
+    fn every_point_of_an_element_moves_within_its_bound() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let task = builtin::task("pick_place").unwrap().unwrap();
+        let scene = Scene::new(&task.world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let limits = robot.joint_limits();
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut sweep = Sweep::new(&model, robot.dof());
+        let mut tight = 0usize;
+        for case in 0..400 {
+            let q: Vec<f64> = limits
+                .iter()
+                .map(|[lo, hi]| rng.gen_range(*lo..*hi))
+                .collect();
+            let size = rng.gen_range(0.01..1.5);
+            for i in 0..q.len() {
+                sweep.step[i] = size * rng.gen_range(-1.0..1.0);
+                sweep.half[i] = sweep.step[i].abs();
+            }
+            let (poses, placed_bodies) = checker.placements(&q, 0.08);
+            checker.sweep_bounds(&poses, &placed_bodies, None, &mut sweep);
+            let f: f64 = rng.gen_range(0.0..=1.0);
+            let side = if rng.gen_bool(0.5) { f } else { -f };
+            for (k, (body, placed_body)) in model.bodies.iter().zip(&placed_bodies).enumerate() {
+                let chain = &model.chains[k];
+                let extent = body.half_segment + body.core_radius;
+                let direction = Vector3::new(
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                    rng.gen_range(-1.0..1.0),
+                )
+                .normalize();
+                let at = placed_body.pose.translation.vector + extent * direction;
+                let local = poses[body.link].inverse() * Point3::from(at);
+                for m in 0..=chain.len() {
+                    let mut moved = q.clone();
+                    for mover in &chain[m..] {
+                        moved[mover.index] = q[mover.index] + side * sweep.step[mover.index];
+                    }
+                    let (after, _) = checker.placements(&moved, 0.08);
+                    let distance = ((after[body.link] * local).coords - at).norm();
+                    let bound = sweep.bounds[model.offsets[k] + m].at(f);
+                    assert!(
+                        distance <= bound + 1e-9,
+                        "case {case}, element {k}, from joint {m}: moved {distance} beyond {bound}"
+                    );
+                    tight += usize::from(distance > 0.5 * bound);
+                }
+            }
+        }
+        // Not vacuous: the bound is often within a factor of two of the motion.
+        assert!(
+            tight > 1000,
+            "only {tight} motions came within half their bound"
+        );
+    }
+}
