@@ -351,9 +351,7 @@ fn bad_input_is_named_with_exit_2() {
         let mut all = vec!["robot", "check"];
         all.extend(args.iter().copied());
         let o = akl(&all);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(expected), "{args:?}: {}", stderr(&o));
-        assert!(!stderr(&o).contains("panicked"));
+        assert_refused(&o, &[expected]);
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

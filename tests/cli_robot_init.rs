@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{akl, json, scratch, stderr, stdout};
+use common::{akl, assert_refused, json, scratch, stderr, stdout};
 use std::path::Path;
 
 #[test]
@@ -44,12 +44,7 @@ fn the_fer_urdf_becomes_a_folder_that_loads() {
     assert!(stdout(&info).contains("7 arm joints"), "{}", stdout(&info));
     // A second run does not overwrite the folder.
     let again = run(false);
-    assert_eq!(again.status.code(), Some(2));
-    assert!(
-        stderr(&again).contains("already exists"),
-        "{}",
-        stderr(&again)
-    );
+    assert_refused(&again, &["already exists"]);
     std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
 }
 

@@ -140,7 +140,6 @@ fn shards_of_a_study_merged_equal_the_whole_study() {
         let mut args = vec!["eval", "--merge"];
         args.extend(parts);
         let o = akl_in(&dir, &args);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stdout(&o));
-        assert!(stderr(&o).contains(says), "no `{says}` in {}", stderr(&o));
+        assert_refused(&o, &[says]);
     }
 }

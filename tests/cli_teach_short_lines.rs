@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{akl_in, frames_only, json, scratch, stderr, stdout};
+use common::{akl_in, assert_refused, frames_only, json, scratch, stderr, stdout};
 use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -160,11 +160,9 @@ fn an_answer_list_must_fit_the_questions_and_may_key_them_by_time() {
 
     // No answer for it: refused, listing it.
     let o = teach_stream(&dir, "descend", &stream, "", "none.jsonl");
-    assert_eq!(o.status.code(), Some(2));
-    let e = stderr(&o);
-    assert!(
-        e.contains(&format!("question 1 at t = {asked_at:.2} s has no answer")),
-        "{e}"
+    assert_refused(
+        &o,
+        &[&format!("question 1 at t = {asked_at:.2} s has no answer")],
     );
 
     // An answer keyed by a time off every question's: refused; keyed by the question's: taken.
@@ -227,6 +225,5 @@ fn learn_uses_the_recorded_answers_unless_given_others() {
     // Frames alone have no answers to use.
     std::fs::write(dir.join("frames.jsonl"), frames_only(&recorded)).unwrap();
     let o = akl_in(&dir, &["learn", "frames.jsonl", "--task", "pull.json"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--answers"), "{}", stderr(&o));
+    assert_refused(&o, &["--answers"]);
 }

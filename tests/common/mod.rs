@@ -37,6 +37,25 @@ pub(crate) fn stderr(o: &Output) -> String {
     text(&o.stderr)
 }
 
+/// Asserts that a command refused bad input as every command must: exit status 2, standard
+/// error naming each of `names` (what is wrong, and where), and no panic. Returns what it wrote
+/// on standard error, for further checks.
+#[track_caller]
+pub(crate) fn assert_refused(o: &Output, names: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "standard error: {err}\nstandard output: {}",
+        stdout(o)
+    );
+    for name in names {
+        assert!(err.contains(name), "no `{name}` in: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
 /// A command's standard output parsed as JSON; a parse failure shows the output.
 pub(crate) fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
