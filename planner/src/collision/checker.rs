@@ -183,9 +183,8 @@ impl<'a> Checker<'a> {
             .map(|body| placed(body, &poses[body.link]))
             .collect();
         let mut sweep = Sweep::new(self.model, a.len());
-        for (i, (x, y)) in a.iter().zip(b).enumerate() {
-            sweep.half[i] = 0.5 * (y - x).abs();
-            sweep.step[i] = 0.5 * (y - x);
+        for (s, (x, y)) in sweep.step.iter_mut().zip(a.iter().zip(b)) {
+            *s = 0.5 * (y - x);
         }
         self.sweep_bounds(&poses, &placed_bodies, held, &mut sweep);
         let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
@@ -288,7 +287,7 @@ impl<'a> Checker<'a> {
                 // A full table bounds the pair over the whole stretch at once (asked where
                 // it puts the pair apart here: elsewhere its blocks seldom clear it).
                 if let Some(t) = model.tables[p].as_ref().filter(|_| tabled > 0.0) {
-                    let stretch = (&pr.sweep.half[..], pr.fraction);
+                    let stretch = (&pr.sweep.step[..], pr.fraction);
                     if t.clear_over(self.robot, q, stretch, -self_slack) {
                         continue;
                     }
@@ -508,9 +507,8 @@ impl<'a> Checker<'a> {
             return Some(hit);
         }
         let mut sweep = Sweep::new(self.model, a.len());
-        for (i, (x, y)) in a.iter().zip(b).enumerate() {
-            sweep.half[i] = (y - x).abs();
-            sweep.step[i] = y - x;
+        for (s, (x, y)) in sweep.step.iter_mut().zip(a.iter().zip(b)) {
+            *s = y - x;
         }
         // Each end proves a stretch into the edge (the bound covers the whole edge about it).
         let mut ends = [0.0; 2];
@@ -531,7 +529,6 @@ impl<'a> Checker<'a> {
             for i in 0..a.len() {
                 q[i] = a[i] + mid * (b[i] - a[i]);
                 sweep.step[i] = half * (b[i] - a[i]);
-                sweep.half[i] = sweep.step[i].abs();
             }
             // Within the joint limits: the ends are, and the limits are a box.
             let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {

@@ -296,7 +296,7 @@ impl PairTable {
     }
 
     /// Whether the two elements (each grown by half the self margin) stay more than `least`
-    /// apart wherever the arm goes within `share`·`half` (per arm joint) of `q` within the
+    /// apart wherever the arm goes within `share`·|`step`| (per arm joint) of `q` within the
     /// joint limits: the stretch of an edge proof, bounded at once where the bound at one
     /// configuration would shrink by the stretch's whole motion. Known only for tables whose
     /// values were all known when they were made (false otherwise, and where a node in the
@@ -309,7 +309,7 @@ impl PairTable {
         &self,
         robot: &Robot,
         q: &[f64],
-        (half, share): (&[f64], f64),
+        (step, share): (&[f64], f64),
         least: f64,
     ) -> bool {
         let Some(minima) = &self.minima else {
@@ -320,7 +320,7 @@ impl PairTable {
         let mut slack = DISTANCE_TOLERANCE;
         for (range, j) in ranges.iter_mut().zip(&self.joints) {
             let [lo, hi] = limits[j.index];
-            let reach = share * half[j.index];
+            let reach = share * step[j.index].abs();
             // In order: `nearest` is monotonic and clamps to the grid, whose ends are the limits.
             *range = (
                 j.nearest((q[j.index] - reach).max(lo)),

@@ -144,10 +144,8 @@ impl Add for Motion {
 /// Work space of an edge check: the joint motion of the stretch being proved free and the
 /// motion bounds derived from it.
 pub(super) struct Sweep {
-    /// How far each arm joint turns or slides from the check to either end of the stretch.
-    pub(super) half: Vec<f64>,
     /// The joint motion from the check to one end of the stretch (to the other it is the
-    /// opposite): `half` with signs.
+    /// opposite): how far each arm joint turns or slides, with its sign.
     pub(super) step: Vec<f64>,
     /// For each chain k of the model, `bounds[offsets[k] + m]` bounds how far any point of
     /// its element moves through the joints `m..` of the chain (0 past the last one).
@@ -157,7 +155,6 @@ pub(super) struct Sweep {
 impl Sweep {
     pub(super) fn new(model: &RobotCollision, dof: usize) -> Sweep {
         Sweep {
-            half: vec![0.0; dof],
             step: vec![0.0; dof],
             bounds: vec![Motion::default(); model.offsets.last().copied().unwrap_or(0)],
         }
@@ -224,7 +221,7 @@ mod tests {
             fraction in 0.0..1.0f64,
         ) {
             let moved = Motion { linear, higher };
-            let sweep = Sweep { half: Vec::new(), step: Vec::new(), bounds: Vec::new() };
+            let sweep = Sweep { step: Vec::new(), bounds: Vec::new() };
             let proof = Proof { sweep: &sweep, offsets: &[], fraction };
             let exact = proof.settled(moved, slack + distance);
             let squared = proof.settled_sq(moved, slack, distance * distance);
@@ -270,7 +267,7 @@ mod tests {
             slack in 1e-4..0.2f64,
         ) {
             let moved = Motion { linear, higher };
-            let sweep = Sweep { half: Vec::new(), step: Vec::new(), bounds: Vec::new() };
+            let sweep = Sweep { step: Vec::new(), bounds: Vec::new() };
             let mut proof = Proof { sweep: &sweep, offsets: &[], fraction: 1.0 };
             proof.limit(moved, slack);
             prop_assert!(moved.at(proof.fraction) <= slack * (1.0 + 1e-12));

@@ -542,7 +542,6 @@ mod motion_bounds {
             let size = rng.gen_range(0.01..1.5);
             for i in 0..q.len() {
                 sweep.step[i] = size * rng.gen_range(-1.0..1.0);
-                sweep.half[i] = sweep.step[i].abs();
             }
             let (poses, placed_bodies) = checker.placements(&q, 0.08);
             checker.sweep_bounds(&poses, &placed_bodies, None, &mut sweep);
