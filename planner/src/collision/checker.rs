@@ -313,7 +313,9 @@ impl<'a> Checker<'a> {
             {
                 continue;
             }
-            if parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose) {
+            if self_meet(ba, pa, bb, pb)
+                || parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose)
+            {
                 return Err(Hit::SelfCollision(
                     links[ba.link].name.clone(),
                     links[bb.link].name.clone(),
@@ -347,7 +349,13 @@ impl<'a> Checker<'a> {
                 let Some(pr) = proof.as_mut() else {
                     let at = place.get_or_insert_with(|| Placement::of(&p.pose));
                     if o.target.gap(&b.world_spheres, at) > 0.0
-                        || !parry_convert::intersects(&b.world_shape, &p.pose, &o.shape, &o.pose)
+                        || !(o.target.reaches(&b.world_inside, at)
+                            || parry_convert::intersects(
+                                &b.world_shape,
+                                &p.pose,
+                                &o.shape,
+                                &o.pose,
+                            ))
                     {
                         continue;
                     }
@@ -371,7 +379,9 @@ impl<'a> Checker<'a> {
                     }
                     continue;
                 }
-                if !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack) {
+                if o.target.reaches(&b.world_inside, at)
+                    || !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack)
+                {
                     return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                 }
             }
@@ -596,6 +606,16 @@ struct Near {
     gap: f64,
     /// The share of the stretch that `gap` proves ([`Motion::share_within`]).
     share: f64,
+}
+
+/// Whether two elements grown by half the self margin certainly overlap: balls inside them
+/// do.
+fn self_meet(a: &Body, pa: &Placed, b: &Body, pb: &Placed) -> bool {
+    a.self_inside.meets(
+        &Placement::of(&pa.pose),
+        &b.self_inside,
+        &Placement::of(&pb.pose),
+    )
 }
 
 /// A lower bound on the distance between two elements grown by half the self margin, from

@@ -35,6 +35,7 @@ mod cull;
 mod exact;
 mod held;
 mod hit;
+mod inside;
 mod minima;
 mod model;
 pub(crate) mod pair_table;

@@ -1,6 +1,7 @@
 //! The robot's collision model: its bodies (collision elements grown by their margins),
 //! the joints that move each, and which pairs are checked against each other.
 
+use super::inside::inside;
 use super::pair_table::PairTable;
 use super::spheres::Spheres;
 use super::stored::StoredTables;
@@ -52,6 +53,11 @@ pub(super) struct Body {
     /// margin, and by half the self margin ([`super::spheres`]).
     pub(super) world_spheres: Spheres,
     pub(super) self_spheres: Spheres,
+    /// Balls inside the element grown by the group's margin, and by half the self margin
+    /// ([`super::inside`]): where one reaches an object or another element's, the pair
+    /// collides.
+    pub(super) world_inside: Spheres,
+    pub(super) self_inside: Spheres,
 }
 
 /// A joint that moves a collision element when the arm moves: the link it turns or slides,
@@ -201,6 +207,7 @@ impl RobotCollision {
                 other => (0.0, other.bounding_radius()),
             };
             let spheres = Spheres::of_geometry(&geometry, SLAB);
+            let within = inside(&geometry);
             bodies.push(Body {
                 link: i,
                 group,
@@ -214,6 +221,8 @@ impl RobotCollision {
                 self_radius: core + 0.5 * margins.self_,
                 world_spheres: spheres.grown(margin),
                 self_spheres: spheres.grown(0.5 * margins.self_),
+                world_inside: within.grown(margin),
+                self_inside: within.grown(0.5 * margins.self_),
             });
         }
         let allowed = |a: usize, b: usize| {

@@ -41,6 +41,25 @@ impl Spheres {
         cover(&vertices, border, slab)
     }
 
+    /// Whether a ball of these, placed by `place`, overlaps one of `other`'s, placed by
+    /// `other_place`: with balls inside two elements ([`super::inside`]), a certain collision.
+    pub(super) fn meets(
+        &self,
+        place: &Placement,
+        other: &Spheres,
+        other_place: &Placement,
+    ) -> bool {
+        let placed: SmallVec<[Vector3<f64>; MAX_SLABS]> =
+            other.centres.iter().map(|c| other_place.apply(c)).collect();
+        self.centres.iter().zip(&self.radii).any(|(c, r)| {
+            let c = place.apply(c);
+            placed
+                .iter()
+                .zip(&other.radii)
+                .any(|(d, s)| (c - d).norm_squared() < (r + s) * (r + s))
+        })
+    }
+
     /// The same balls with every radius grown by `by`.
     pub(super) fn grown(&self, by: f64) -> Spheres {
         Spheres {
@@ -241,6 +260,19 @@ impl Target {
             .zip(&spheres.radii)
             .map(|(c, r)| self.distance(&place.apply(c)) - r)
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Whether a ball of `inside` placed by `place` reaches into the object: with balls
+    /// inside an element ([`super::inside`]), a certain collision. Only the primitives'
+    /// distances are exact; for anything else, `false`.
+    #[inline]
+    pub(super) fn reaches(&self, inside: &Spheres, place: &Placement) -> bool {
+        !matches!(self.solid, Solid::Other)
+            && inside
+                .centres
+                .iter()
+                .zip(&inside.radii)
+                .any(|(c, r)| self.distance(&place.apply(c)) < *r)
     }
 }
 
