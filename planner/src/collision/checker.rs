@@ -313,9 +313,7 @@ impl<'a> Checker<'a> {
             {
                 continue;
             }
-            if self_meet(ba, pa, bb, pb)
-                || parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose)
-            {
+            if parry_convert::intersects(&ba.self_shape, &pa.pose, &bb.self_shape, &pb.pose) {
                 return Err(Hit::SelfCollision(
                     links[ba.link].name.clone(),
                     links[bb.link].name.clone(),
@@ -606,16 +604,6 @@ struct Near {
     gap: f64,
     /// The share of the stretch that `gap` proves ([`Motion::share_within`]).
     share: f64,
-}
-
-/// Whether two elements grown by half the self margin certainly overlap: balls inside them
-/// do.
-fn self_meet(a: &Body, pa: &Placed, b: &Body, pb: &Placed) -> bool {
-    a.self_inside.meets(
-        &Placement::of(&pa.pose),
-        &b.self_inside,
-        &Placement::of(&pb.pose),
-    )
 }
 
 /// A lower bound on the distance between two elements grown by half the self margin, from

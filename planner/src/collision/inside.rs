@@ -1,6 +1,5 @@
-//! Balls that lie inside a collision element: where one of them reaches an object (or a
-//! ball inside another element), the element does, so a collision is certain without the
-//! exact (GJK) test.
+//! Balls that lie inside a collision element: where one of them reaches an object, the
+//! element does, so a collision is certain without the exact (GJK) test.
 //!
 //! Most configurations a search checks on cluttered problems collide, and a plain check
 //! pays for the exact test on the pair that collides (BENCHMARKS.md, "Balls inside the
@@ -321,25 +320,6 @@ mod tests {
                 let (element_shape, _) = parry_convert::robot_shape(geometry, margin);
                 let (object, fix) = parry_convert::object_shape(&shape, 0.0);
                 prop_assert!(parry_convert::intersects(&element_shape, &at, &object, &(pose * fix)));
-            }
-        }
-
-        /// The same between two elements.
-        #[test]
-        fn balls_meeting_mean_the_elements_touch(
-            a in 0usize..64,
-            b in 0usize..64,
-            pa in arb_pose(0.15),
-            pb in arb_pose(0.15),
-            margin in 0.0..0.01f64,
-        ) {
-            let (ga, sa) = &panda()[a % panda().len()];
-            let (gb, sb) = &panda()[b % panda().len()];
-            let (placed_a, placed_b) = (Placement::of(&pa), Placement::of(&pb));
-            if sa.grown(margin).meets(&placed_a, &sb.grown(margin), &placed_b) {
-                let (shape_a, _) = parry_convert::robot_shape(ga, margin);
-                let (shape_b, _) = parry_convert::robot_shape(gb, margin);
-                prop_assert!(parry_convert::intersects(&shape_a, &pa, &shape_b, &pb));
             }
         }
     }

@@ -53,11 +53,9 @@ pub(super) struct Body {
     /// margin, and by half the self margin ([`super::spheres`]).
     pub(super) world_spheres: Spheres,
     pub(super) self_spheres: Spheres,
-    /// Balls inside the element grown by the group's margin, and by half the self margin
-    /// ([`super::inside`]): where one reaches an object or another element's, the pair
-    /// collides.
+    /// Balls inside the element grown by the group's margin ([`super::inside`]): where one
+    /// reaches an object, the pair collides.
     pub(super) world_inside: Spheres,
-    pub(super) self_inside: Spheres,
 }
 
 /// A joint that moves a collision element when the arm moves: the link it turns or slides,
@@ -207,7 +205,6 @@ impl RobotCollision {
                 other => (0.0, other.bounding_radius()),
             };
             let spheres = Spheres::of_geometry(&geometry, SLAB);
-            let within = inside(&geometry);
             bodies.push(Body {
                 link: i,
                 group,
@@ -221,8 +218,7 @@ impl RobotCollision {
                 self_radius: core + 0.5 * margins.self_,
                 world_spheres: spheres.grown(margin),
                 self_spheres: spheres.grown(0.5 * margins.self_),
-                world_inside: within.grown(margin),
-                self_inside: within.grown(0.5 * margins.self_),
+                world_inside: inside(&geometry).grown(margin),
             });
         }
         let allowed = |a: usize, b: usize| {

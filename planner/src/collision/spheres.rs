@@ -41,25 +41,6 @@ impl Spheres {
         cover(&vertices, border, slab)
     }
 
-    /// Whether a ball of these, placed by `place`, overlaps one of `other`'s, placed by
-    /// `other_place`: with balls inside two elements ([`super::inside`]), a certain collision.
-    pub(super) fn meets(
-        &self,
-        place: &Placement,
-        other: &Spheres,
-        other_place: &Placement,
-    ) -> bool {
-        let placed: SmallVec<[Vector3<f64>; MAX_SLABS]> =
-            other.centres.iter().map(|c| other_place.apply(c)).collect();
-        self.centres.iter().zip(&self.radii).any(|(c, r)| {
-            let c = place.apply(c);
-            placed
-                .iter()
-                .zip(&other.radii)
-                .any(|(d, s)| (c - d).norm_squared() < (r + s) * (r + s))
-        })
-    }
-
     /// The same balls with every radius grown by `by`.
     pub(super) fn grown(&self, by: f64) -> Spheres {
         Spheres {
