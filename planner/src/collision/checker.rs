@@ -336,11 +336,17 @@ impl<'a> Checker<'a> {
             let bounds = bounding_box(p, b.world_radius);
             let role = model.role(b);
             let mut place: Option<Placement> = None;
-            for (index, o) in self.scene.obstacles.iter().enumerate() {
-                let gap_sq = box_gap_sq(&bounds, &o.target.min, &o.target.max);
-                if gap_sq > 0.0 && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
+            let scene = self.scene;
+            for (index, (o, flat)) in scene.obstacles.iter().zip(&scene.boxes).enumerate() {
+                let apart = flat.apart_from(&bounds);
+                if apart && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
                     continue;
                 }
+                let gap_sq = if apart {
+                    box_gap_sq(&bounds, &o.target.min, &o.target.max)
+                } else {
+                    0.0
+                };
                 if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
                     continue;
                 }

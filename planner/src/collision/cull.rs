@@ -45,6 +45,37 @@ pub(super) fn bounding_box(p: &Placed, r: f64) -> [Vector3<f64>; 2] {
     [p.a.inf(&p.b) - grow, p.a.sup(&p.b) + grow]
 }
 
+/// A world-axis-aligned box stored flat: a check tests every element's box against every
+/// object's, and the objects' boxes side by side in a short array keep that scan in cache.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct FlatBox {
+    min: [f64; 3],
+    max: [f64; 3],
+}
+
+impl FlatBox {
+    /// The box from `min` to `max`.
+    pub(super) fn new(min: &Vector3<f64>, max: &Vector3<f64>) -> FlatBox {
+        FlatBox {
+            min: [min.x, min.y, min.z],
+            max: [max.x, max.y, max.z],
+        }
+    }
+
+    /// Whether the box `b` (min, max) lies apart from this one: exactly when
+    /// [`box_gap_sq`] between them is positive. The six comparisons are all made, without
+    /// branches: most pairs are apart, along an axis no branch predictor can guess.
+    #[inline(always)]
+    pub(super) fn apart_from(&self, b: &[Vector3<f64>; 2]) -> bool {
+        (b[0].x > self.max[0])
+            | (self.min[0] > b[1].x)
+            | (b[0].y > self.max[1])
+            | (self.min[1] > b[1].y)
+            | (b[0].z > self.max[2])
+            | (self.min[2] > b[1].z)
+    }
+}
+
 /// Squared distance between two world-axis-aligned boxes (0 when they overlap).
 pub(super) fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
     (a[0] - max)
