@@ -85,7 +85,8 @@ impl<'a> Checker<'a> {
         if !self.within_limits(q) {
             return Some(Hit::Limits);
         }
-        self.probe::<false>(q, width, held, allow, None).err()
+        self.probe::<false, false>(q, width, held, allow, None)
+            .err()
     }
 
     pub(super) fn within_limits(&self, q: &[f64]) -> bool {
@@ -223,8 +224,11 @@ impl<'a> Checker<'a> {
     /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
     /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
     /// proved free (see the module documentation). Plain checks are compiled without the
-    /// proof's work.
-    pub(super) fn probe<const PROVE: bool>(
+    /// proof's work. With `WORLD_FIRST` (plain checks only), a collision with the world that
+    /// balls inside the elements make certain is looked for first, hand first: cheaper where
+    /// most configurations collide (a screen's), though the collision found may then be
+    /// another than the one the usual order reports.
+    pub(super) fn probe<const PROVE: bool, const WORLD_FIRST: bool>(
         &self,
         q: &[f64],
         width: f64,
@@ -250,6 +254,11 @@ impl<'a> Checker<'a> {
                 fraction: 1.0,
             }
         });
+        if WORLD_FIRST && !PROVE {
+            if let Some(hit) = self.certain_world_hit(placed_bodies, allow) {
+                return Err(hit);
+            }
+        }
         let m = model.margins;
         // Self collision: bounding balls, then segment distance, then parry.
         let self_slack = 0.5 * m.self_;
@@ -527,7 +536,7 @@ impl<'a> Checker<'a> {
         // Each end proves a stretch into the edge (the bound covers the whole edge about it).
         let mut ends = [0.0; 2];
         for (end, q) in ends.iter_mut().zip([b, a]) {
-            match self.probe::<true>(q, width, held, allow, Some(&mut sweep)) {
+            match self.probe::<true, false>(q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => *end = fraction,
                 Err(hit) => return Some(hit),
             }
@@ -545,13 +554,45 @@ impl<'a> Checker<'a> {
                 sweep.step[i] = half * (b[i] - a[i]);
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
+            let proved = match self.probe::<true, false>(&q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => half * fraction,
                 Err(hit) => return Some(hit),
             };
             if proved < half {
                 open.push_back((lo, mid - proved));
                 open.push_back((mid + proved, hi));
+            }
+        }
+        None
+    }
+
+    /// A collision of the elements `placed_bodies` with the world that balls inside them make
+    /// certain, if there is one, without any exact test. The elements are taken from the
+    /// hand back to the base: the far end of the arm sweeps the most space and collides most.
+    fn certain_world_hit(&self, placed_bodies: &[Placed], allow: &Allowances) -> Option<Hit> {
+        let scene = self.scene;
+        for (b, p) in self.model.bodies.iter().zip(placed_bodies).rev() {
+            let bounds = bounding_box(p, b.world_radius);
+            let mut place: Option<Placement> = None;
+            for (o, flat) in scene.obstacles.iter().zip(&scene.boxes) {
+                if flat.apart_from(&bounds) {
+                    continue;
+                }
+                let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                if o.target.reaches(&b.world_inside, at)
+                    && !contact_rules::link_may_touch(
+                        self.model.role(b),
+                        &o.name,
+                        None,
+                        scene.mount(),
+                        allow,
+                    )
+                {
+                    return Some(Hit::World(
+                        self.robot.links()[b.link].name.clone(),
+                        o.name.clone(),
+                    ));
+                }
             }
         }
         None
@@ -581,7 +622,7 @@ impl<'a> Checker<'a> {
                 *v = x + t * (y - x);
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            if let Err(hit) = self.probe::<false>(&q, width, held, allow, None) {
+            if let Err(hit) = self.probe::<false, true>(&q, width, held, allow, None) {
                 return Some(hit);
             }
         }

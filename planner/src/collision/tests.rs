@@ -232,6 +232,54 @@ mod checks {
         assert_eq!(checker.check(&q, 0.05, Some(&held), &allow), None);
     }
 
+    /// A block inside the palm at the middle of an edge: the screen finds the hand in it
+    /// (balls inside the hand reach it, so no exact test is needed), and where the hand may
+    /// touch the block the screen and the proof find nothing.
+    #[test]
+    fn screening_keeps_to_what_the_hand_may_touch() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let mut a = robot.ready().to_vec();
+        let mut b = a.clone();
+        a[0] -= 0.3;
+        b[0] += 0.3;
+        let hand = robot
+            .links()
+            .iter()
+            .position(|l| l.name == "fer_hand")
+            .unwrap();
+        let palm = robot.link_poses(robot.ready(), 0.08)[hand]
+            * akl_tsr::nalgebra::Point3::new(0.0, 0.0, 0.04);
+        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+        world.objects.push(akl_scene::Object {
+            name: "block".into(),
+            shape: akl_scene::Shape::Box {
+                size: [0.02, 0.02, 0.02],
+            },
+            pose: akl_tsr::pose::pose_from_xyz([palm.x, palm.y, palm.z]),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        match checker.screen(&a, &b, 0.08, None, &none(), 2) {
+            Some(Hit::World(link, object)) => {
+                assert_eq!((link.as_str(), object.as_str()), ("fer_hand", "block"));
+            }
+            other => panic!("expected the hand in the block, got {other:?}"),
+        }
+        let may_touch = Allowances {
+            hand_may_touch: vec!["block".into()],
+            ..Allowances::default()
+        };
+        assert_eq!(checker.screen(&a, &b, 0.08, None, &may_touch, 8), None);
+        assert_eq!(
+            checker.screened_edge(&a, &b, 0.08, None, &may_touch, 8),
+            None
+        );
+    }
+
     /// Screening finds a post in the way of an edge whose ends are free, at the edge's
     /// middle (its second point), and reports what hit it; with only the end screened it
     /// finds nothing, and the proof alone finds the post too. An end beyond the joint limits
