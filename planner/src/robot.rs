@@ -2,7 +2,7 @@
 //! settings and inverse kinematics solver. The Panda is built into the binary.
 
 use crate::collision::pair_table::PairTable;
-use crate::collision::StoredTables;
+use crate::collision::{ElementBalls, StoredTables};
 use crate::config::{IkSolverKind, RobotConfig};
 use crate::enclosure;
 use crate::error::{IkError, JointsError, MeshFailure, RobotError, UrdfError};
@@ -157,6 +157,9 @@ pub struct Robot {
     pair_tables: Mutex<Vec<(u64, PairTables)>>,
     /// Table values computed ahead (`self_tables.bin`), taken by the tables they fit.
     stored_tables: StoredTables,
+    /// The balls of every collision element, made by the first collision model built for this
+    /// robot and shared by the rest (a trial builds one).
+    element_balls: OnceLock<ElementBalls>,
 }
 
 /// The distance tables of a collision model's self pairs, in the model's pair order.
@@ -374,6 +377,7 @@ impl Robot {
             digest: OnceLock::new(),
             pair_tables: Mutex::new(Vec::new()),
             stored_tables: StoredTables::default(),
+            element_balls: OnceLock::new(),
         };
         // A linkage's opening is mapped to its knuckle angle through the pads' gap.
         if let Some(map) = crate::hand::linkage_width_map(&robot) {
@@ -410,6 +414,12 @@ impl Robot {
         let tables = build();
         cache.push((key, tables.clone()));
         tables
+    }
+
+    /// The balls of every collision element (`collision::model`): the ones made for an
+    /// earlier model of this robot, else those `build` makes.
+    pub(crate) fn element_balls(&self, build: impl FnOnce() -> ElementBalls) -> &ElementBalls {
+        self.element_balls.get_or_init(build)
     }
 
     /// Self-collision table values computed ahead (empty if the robot has none).

@@ -51,6 +51,7 @@ pub use checker::Checker;
 pub use exact::ExactShape;
 pub use held::Held;
 pub use hit::Hit;
+pub(crate) use model::ElementBalls;
 pub use model::{Margins, RobotCollision, TableSummary};
 pub use report::{CheckReport, Clearance, Contact};
 pub use scene::Scene;

@@ -116,6 +116,30 @@ pub(super) fn collision_elements(robot: &Robot) -> Vec<(usize, Geometry, Pose)> 
     urdf.chain(hand).collect()
 }
 
+/// The balls of a robot's collision elements before any margin, in the order of
+/// [`collision_elements`]: made once per robot ([`Robot::element_balls`]), as finding the
+/// balls inside the hulls costs more than the rest of a model.
+#[derive(Debug, Clone)]
+pub(crate) struct ElementBalls {
+    /// Balls that hold each element ([`Spheres::of_geometry`]).
+    holding: Vec<Spheres>,
+    /// Balls inside each element ([`inside`]).
+    inside: Vec<Spheres>,
+}
+
+impl ElementBalls {
+    /// The balls of `elements` (link, geometry, pose in the link frame).
+    fn of(elements: &[(usize, Geometry, Pose)]) -> ElementBalls {
+        ElementBalls {
+            holding: elements
+                .iter()
+                .map(|(_, g, _)| Spheres::of_geometry(g, SLAB))
+                .collect(),
+            inside: elements.iter().map(|(_, g, _)| inside(g)).collect(),
+        }
+    }
+}
+
 /// The clearances kept (metres).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Margins {
@@ -189,7 +213,12 @@ impl RobotCollision {
     /// The same with other margins (e.g. to re-check a plan with the clearance it guarantees).
     pub fn with_margins(robot: &Robot, margins: Margins) -> RobotCollision {
         let mut bodies = Vec::new();
-        for (i, geometry, origin) in collision_elements(robot) {
+        let elements = collision_elements(robot);
+        let balls = robot.element_balls(|| ElementBalls::of(&elements));
+        for ((i, geometry, origin), (spheres, within)) in elements
+            .into_iter()
+            .zip(balls.holding.iter().zip(&balls.inside))
+        {
             let group = if robot.hand_links().contains(&i) {
                 Group::Hand
             } else {
@@ -204,7 +233,6 @@ impl RobotCollision {
                 Geometry::RoundHull(hull) => (hull.half_length, hull.radius),
                 other => (0.0, other.bounding_radius()),
             };
-            let spheres = Spheres::of_geometry(&geometry, SLAB);
             bodies.push(Body {
                 link: i,
                 group,
@@ -218,7 +246,7 @@ impl RobotCollision {
                 self_radius: core + 0.5 * margins.self_,
                 world_spheres: spheres.grown(margin),
                 self_spheres: spheres.grown(0.5 * margins.self_),
-                world_inside: inside(&geometry).grown(margin),
+                world_inside: within.grown(margin),
             });
         }
         let allowed = |a: usize, b: usize| {
