@@ -346,11 +346,12 @@ impl<'a> Checker<'a> {
             let role = model.role(b);
             let mut place: Option<Placement> = None;
             let scene = self.scene;
-            for (index, (o, flat)) in scene.obstacles.iter().zip(&scene.boxes).enumerate() {
+            for (index, flat) in scene.boxes.iter().enumerate() {
                 let apart = flat.apart_from(&bounds);
                 if apart && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
                     continue;
                 }
+                let o = &scene.obstacles[index];
                 let gap_sq = if apart {
                     box_gap_sq(&bounds, &o.target.min, &o.target.max)
                 } else {
@@ -574,7 +575,7 @@ impl<'a> Checker<'a> {
         for (b, p) in self.model.bodies.iter().zip(placed_bodies).rev() {
             let bounds = bounding_box(p, b.world_radius);
             let mut place: Option<Placement> = None;
-            for (o, flat) in scene.obstacles.iter().zip(&scene.boxes) {
+            for (flat, o) in scene.boxes.iter().zip(&scene.obstacles) {
                 if flat.apart_from(&bounds) {
                     continue;
                 }

@@ -16,9 +16,10 @@ use super::spheres::Spheres;
 use crate::geometry::Geometry;
 use akl_tsr::nalgebra::Vector3;
 
-/// Thickest slab an element is cut into for its inside balls (metres): about the radius of
-/// an arm link, so that neighbouring balls overlap and leave few gaps along the link.
-const SLAB: f64 = 0.04;
+/// Thickest slab an element is cut into for its inside balls (metres): two or three balls
+/// per arm link. Chosen by measurement (BENCHMARKS.md, "Balls inside the links"): thinner
+/// slabs find a few more collisions but cost more in the checks that find none.
+const SLAB: f64 = 0.12;
 
 /// Most inside balls an element gets.
 const MAX_BALLS: usize = 8;
