@@ -156,6 +156,7 @@ fn deepest_per_slab(
 mod tests {
     use super::*;
     use crate::collision::model::collision_elements;
+    use crate::collision::spheres::tests::{arb_pose, arb_shape};
     use crate::collision::spheres::{Placement, Solid, Target};
     use crate::parry_convert;
     use crate::robot::Robot;
@@ -271,35 +272,6 @@ mod tests {
                 "{geometry:?}: a ball reaches {worst} m outside"
             );
         }
-    }
-
-    fn arb_pose(reach: f64) -> impl Strategy<Value = Pose> {
-        (
-            prop::array::uniform3(-reach..reach),
-            prop::array::uniform3(-3.2..3.2f64),
-        )
-            .prop_map(|(t, r)| {
-                Pose::from_parts(
-                    Translation3::new(t[0], t[1], t[2]),
-                    UnitQuaternion::from_euler_angles(r[0], r[1], r[2]),
-                )
-            })
-    }
-
-    fn arb_shape() -> impl Strategy<Value = Shape> {
-        let len = 0.01..0.5f64;
-        prop_oneof![
-            prop::array::uniform3(len.clone()).prop_map(|size| Shape::Box { size }),
-            (len.clone(), len.clone()).prop_map(|(radius, length)| Shape::Cylinder {
-                radius: 0.5 * radius,
-                length
-            }),
-            (len.clone(), len.clone()).prop_map(|(radius, length)| Shape::Capsule {
-                radius: 0.5 * radius,
-                length
-            }),
-            len.prop_map(|radius| Shape::Sphere { radius }),
-        ]
     }
 
     proptest! {

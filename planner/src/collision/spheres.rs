@@ -296,7 +296,7 @@ pub(super) fn gap_between(a: &Spheres, pa: &Placement, b: &Spheres, pb: &Placeme
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::collision::model::collision_elements;
     use crate::parry_convert;
@@ -333,7 +333,8 @@ mod tests {
             .fold(f64::INFINITY, f64::min)
     }
 
-    fn arb_pose(reach: f64) -> impl Strategy<Value = Pose> {
+    /// Any pose within `reach` of the origin (per axis), turned any way.
+    pub(in crate::collision) fn arb_pose(reach: f64) -> impl Strategy<Value = Pose> {
         (
             prop::array::uniform3(-reach..reach),
             prop::array::uniform3(-3.2..3.2f64),
@@ -346,7 +347,8 @@ mod tests {
             })
     }
 
-    fn arb_shape() -> impl Strategy<Value = Shape> {
+    /// A box, cylinder, capsule or ball of 1–50 cm.
+    pub(in crate::collision) fn arb_shape() -> impl Strategy<Value = Shape> {
         let len = 0.01..0.5f64;
         prop_oneof![
             prop::array::uniform3(len.clone()).prop_map(|size| Shape::Box { size }),
