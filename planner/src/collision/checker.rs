@@ -357,7 +357,7 @@ impl<'a> Checker<'a> {
                 } else {
                     0.0
                 };
-                if contact_rules::link_may_touch(role, &o.name, None, self.scene.mount(), allow) {
+                if contact_rules::link_may_touch(role, &o.name, None, scene.mount(), allow) {
                     continue;
                 }
                 let Some(pr) = proof.as_mut() else {
