@@ -161,4 +161,23 @@ mod tests {
             assert!((p.a - a).norm() < 1e-12 && (p.b - b).norm() < 1e-12, "{k}");
         }
     }
+
+    proptest::proptest! {
+        /// The flat apart test says apart exactly where the boxes' gap is positive, touching
+        /// boxes included (corners on a coarse grid, so that faces often meet).
+        #[test]
+        fn flat_boxes_are_apart_exactly_where_the_gap_is_positive(
+            a in proptest::array::uniform6(-3i8..4),
+            b in proptest::array::uniform6(-3i8..4),
+        ) {
+            let corners = |c: [i8; 6]| {
+                let v = |i: usize| f64::from(c[i]) * 0.1;
+                let (x, y) = (Vector3::new(v(0), v(1), v(2)), Vector3::new(v(3), v(4), v(5)));
+                [x.inf(&y), x.sup(&y)]
+            };
+            let (a, b) = (corners(a), corners(b));
+            let flat = FlatBox::new(&b[0], &b[1]);
+            proptest::prop_assert_eq!(flat.apart_from(&a), box_gap_sq(&a, &b[0], &b[1]) > 0.0);
+        }
+    }
 }
