@@ -4,11 +4,12 @@
 use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed};
 use super::held::Held;
 use super::hit::Hit;
+use super::lanes::Element;
 use super::model::{Body, Group, RobotCollision};
 use super::pair_table::Tabled;
 use super::scene::{Obstacle, Scene};
 use super::spheres::{gap_between, Placement};
-use super::sweep::{Motion, Proof, Sweep, Velocity};
+use super::sweep::{Motion, Proof, Sweep};
 use crate::contact_rules::Allowances;
 use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
@@ -21,9 +22,6 @@ use std::collections::VecDeque;
 
 /// Links whose poses a check keeps on the stack; robots with more spill to the heap.
 const INLINE_LINKS: usize = 32;
-
-/// Joints of one chain whose turns a motion bound keeps on the stack.
-const INLINE_CHAIN: usize = 16;
 
 /// Collision elements whose placements a check keeps on the stack; more spill to the heap.
 const INLINE_BODIES: usize = 64;
@@ -122,49 +120,32 @@ impl<'a> Checker<'a> {
         for &(link, axis) in &model.turned {
             axes[link] = poses[link].rotation * axis;
         }
-        for (k, chain) in model.chains.iter().enumerate() {
-            let (centre, extent) = match (placed_bodies.get(k), model.bodies.get(k)) {
-                (Some(p), Some(b)) => (p.pose.translation.vector, b.half_segment + b.core_radius),
-                _ => match held {
-                    Some(h) => ((tcp * h.in_tcp).translation.vector, h.core),
-                    None => (tcp.translation.vector, 0.0),
+        let origins: SmallVec<[Vector3<f64>; INLINE_LINKS]> =
+            poses.iter().map(|p| p.translation.vector).collect();
+        let element = |k: usize| match (placed_bodies.get(k), model.bodies.get(k)) {
+            (Some(p), Some(b)) => Element {
+                centre: p.pose.translation.vector,
+                extent: b.half_segment + b.core_radius,
+            },
+            _ => match held {
+                Some(h) => Element {
+                    centre: (tcp * h.in_tcp).translation.vector,
+                    extent: h.core,
                 },
-            };
-            // How far the chain's revolute joints up to and including each one turn: the
-            // most the frame of each joint's axis rotates along the stretch.
-            let mut rotated: SmallVec<[f64; INLINE_CHAIN]> = SmallVec::new();
-            let mut total = 0.0;
-            for mover in chain {
-                if mover.axis.is_some() {
-                    total += (mover.scale * sweep.step[mover.index]).abs();
-                }
-                rotated.push(total);
-            }
-            let slots = &mut sweep.bounds[model.offsets[k]..model.offsets[k + 1]];
-            let mut velocity = Velocity::default();
-            let mut beyond = Motion::default();
-            slots[chain.len()] = beyond;
-            for (m, mover) in chain.iter().enumerate().rev() {
-                let turn = mover.scale * sweep.step[mover.index];
-                let reached = if mover.axis.is_some() {
-                    let axis = axes[mover.link];
-                    let lever = axis.cross(&(centre - poses[mover.link].translation.vector));
-                    let reach = lever.norm() + extent;
-                    velocity.turn(turn, &lever, &axis, reach, rotated[m], beyond);
-                    beyond.turned(reach, turn.abs())
-                } else {
-                    velocity.slide(turn.abs(), rotated[m]);
-                    beyond.slid(turn.abs())
-                };
-                let carried = velocity.motion(extent);
-                beyond = if carried.whole() < reached.whole() {
-                    carried
-                } else {
-                    reached
-                };
-                slots[m] = beyond;
-            }
-        }
+                None => Element {
+                    centre: tcp.translation.vector,
+                    extent: 0.0,
+                },
+            },
+        };
+        model.lanes.bound(
+            &sweep.step,
+            &axes,
+            &origins,
+            element,
+            &model.offsets,
+            &mut sweep.bounds,
+        );
     }
 
     /// Upper bound on how far any point of the robot's collision elements, or of `held`,
@@ -188,7 +169,7 @@ impl<'a> Checker<'a> {
             *s = 0.5 * (y - x);
         }
         self.sweep_bounds(&poses, &placed_bodies, held, &mut sweep);
-        let last = self.model.chains.len() - if held.is_some() { 0 } else { 1 };
+        let last = self.model.offsets.len() - if held.is_some() { 1 } else { 2 };
         (0..last)
             .map(|k| sweep.bounds[self.model.offsets[k]].whole())
             .fold(0.0, f64::max)

@@ -2,6 +2,7 @@
 //! the joints that move each, and which pairs are checked against each other.
 
 use super::inside::inside;
+use super::lanes::ChainLanes;
 use super::pair_table::PairTable;
 use super::spheres::Spheres;
 use super::stored::StoredTables;
@@ -89,10 +90,10 @@ pub struct RobotCollision {
     pub(super) mount_links: Vec<usize>,
     pub(super) margins: Margins,
     pub(super) tcp: usize,
-    /// For each body, then for the TCP: the arm-driven joints from the base to its link.
-    pub(super) chains: Vec<Vec<Mover>>,
     /// Where each chain's motion bounds start in a [`Sweep`]'s `bounds`.
     pub(super) offsets: Vec<usize>,
+    /// The chains in groups of four, for bounding their motion side by side.
+    pub(super) lanes: ChainLanes,
     /// For each self pair, how many leading joints of their chains the two bodies share.
     pub(super) self_shared: Vec<usize>,
     /// For each self pair, its distance table if one or two joints move the two apart.
@@ -315,7 +316,7 @@ impl RobotCollision {
             mount_links: robot.mount_links().to_vec(),
             margins,
             tcp,
-            chains,
+            lanes: ChainLanes::new(&chains),
             offsets,
             self_shared,
             tables,

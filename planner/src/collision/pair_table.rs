@@ -526,7 +526,10 @@ mod tests {
             .find(|(p, _)| model.tables[*p].is_some())
             .unwrap();
         let s = model.self_shared[p];
-        let beyond = [&model.chains[i][s..], &model.chains[j][s..]];
+        let chain =
+            |k: usize| super::super::model::chain_to(robot.kinematics(), model.bodies[k].link);
+        let (a, b) = (chain(i), chain(j));
+        let beyond = [&a[s..], &b[s..]];
         PairTable::for_pair(robot, &model.bodies[i], &model.bodies[j], beyond, grow).unwrap()
     }
 

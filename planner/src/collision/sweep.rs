@@ -2,7 +2,6 @@
 //! ([`Sweep`], [`Motion`]) against the clearances found at a check ([`Proof`]).
 
 use super::model::RobotCollision;
-use akl_tsr::nalgebra::Vector3;
 use std::ops::Add;
 
 /// A bound on how far a point moves over a stretch, kept as a function of the share f of
@@ -24,6 +23,7 @@ pub(super) struct Motion {
 }
 
 impl Motion {
+    #[cfg(test)]
     /// The bound over the whole stretch.
     pub(super) fn whole(self) -> f64 {
         self.linear + self.higher
@@ -51,6 +51,7 @@ impl Motion {
         }
     }
 
+    #[cfg(test)]
     /// The motion of a point carried further by `turn` (radians, times the joint's scale) of
     /// a revolute joint whose axis is `reach` from the point at the check.
     pub(super) fn turned(self, reach: f64, turn: f64) -> Motion {
@@ -60,73 +61,12 @@ impl Motion {
         }
     }
 
+    #[cfg(test)]
     /// The motion of a point carried further by a slide of `distance` metres.
     pub(super) fn slid(self, distance: f64) -> Motion {
         Motion {
             linear: self.linear + distance,
             higher: self.higher,
-        }
-    }
-}
-
-/// The second bound of [`Checker::sweep_bounds`](super::Checker), built from the last joint
-/// of a chain to the first: the element's velocity at the check through those joints (a point
-/// of the element moves at first by `linear`·f when the stretch's share f is taken, `linear`
-/// being the speed of the element's centre plus its turning rate times its extent), and how
-/// far its motion can stray from that straight start over the stretch.
-///
-/// Joint j contributes Δⱼ·(aⱼ × (p − oⱼ)) to the velocity of a point p. Along the stretch
-/// that vector changes: the rotation of every joint up to j turns it (by at most their turns
-/// times its length, which is the reach r from the axis plus what the joints beyond move the
-/// point, D(s)), and the joints beyond move p (by D(s)). Integrated over the share f, with
-/// D(s) ≤ L·s + Q·s² from the bound beyond j, joint j's part of the stray is at most
-/// f²·|Δⱼ|·(T·(r/2 + L/3 + Q/4) + L/2 + Q/3), T being the turns up to j; a slide's is
-/// f²·|Δⱼ|·T/2.
-#[derive(Debug, Default)]
-pub(super) struct Velocity {
-    /// The velocity of the element's centre, per unit share of the stretch.
-    centre: Vector3<f64>,
-    /// The element's rate of turning.
-    spin: Vector3<f64>,
-    /// The slides' part, summed as lengths.
-    slid: f64,
-    /// The stray from the straight start, at share 1.
-    stray: f64,
-}
-
-impl Velocity {
-    /// Adds a revolute joint turning by `turn` about the world axis `axis`, `lever` being
-    /// axis × (centre − a point of the axis), `reach` the element's furthest distance from
-    /// the axis, `rotated` the turns of the chain's joints up to and including this one, and
-    /// `beyond` the motion bound through the joints after it.
-    pub(super) fn turn(
-        &mut self,
-        turn: f64,
-        lever: &Vector3<f64>,
-        axis: &Vector3<f64>,
-        reach: f64,
-        rotated: f64,
-        beyond: Motion,
-    ) {
-        self.centre += turn * lever;
-        self.spin += turn * axis;
-        let (l, q) = (beyond.linear, beyond.higher);
-        self.stray +=
-            turn.abs() * (rotated * (0.5 * reach + l / 3.0 + 0.25 * q) + 0.5 * l + q / 3.0);
-    }
-
-    /// Adds a prismatic joint sliding by `distance`, with `rotated` the turns of the
-    /// chain's revolute joints before it.
-    pub(super) fn slide(&mut self, distance: f64, rotated: f64) {
-        self.slid += distance;
-        self.stray += 0.5 * distance * rotated;
-    }
-
-    /// The motion bound of a point within `extent` of the centre.
-    pub(super) fn motion(&self, extent: f64) -> Motion {
-        Motion {
-            linear: self.centre.norm() + self.spin.norm() * extent + self.slid,
-            higher: self.stray,
         }
     }
 }

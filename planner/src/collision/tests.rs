@@ -559,6 +559,7 @@ fn the_intersection_test_has_no_false_positives_near_contact() {
 }
 
 mod motion_bounds {
+    use super::super::model::chain_to;
     use super::super::sweep::Sweep;
     use super::*;
     use akl_scene::builtin;
@@ -596,7 +597,7 @@ mod motion_bounds {
             let f: f64 = rng.gen_range(0.0..=1.0);
             let side = if rng.gen_bool(0.5) { f } else { -f };
             for (k, (body, placed_body)) in model.bodies.iter().zip(&placed_bodies).enumerate() {
-                let chain = &model.chains[k];
+                let chain = &chain_to(robot.kinematics(), body.link);
                 let extent = body.half_segment + body.core_radius;
                 let direction = Vector3::new(
                     rng.gen_range(-1.0..1.0),
