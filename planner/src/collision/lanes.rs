@@ -51,13 +51,25 @@ struct LaneJoint {
     slides: bool,
 }
 
-/// Four chains, level by level: `joints[m][l]` is the m-th joint (from the base) of lane l's
-/// chain, padding past its end.
+/// Four chains, level by level: `levels[m]` holds the m-th joint (from the base) of each
+/// lane's chain, padding past its end.
 #[derive(Debug, Clone, PartialEq)]
 struct Group {
     chains: [usize; LANES],
     lengths: [usize; LANES],
-    joints: Vec<[LaneJoint; LANES]>,
+    levels: Vec<Level>,
+}
+
+/// One level of a group.
+#[derive(Debug, Clone, PartialEq)]
+struct Level {
+    joints: [LaneJoint; LANES],
+    /// The joint of every lane whose chain reaches this level, when they all have the same
+    /// one (chains of one serial arm share their first joints): its axis and turn are then
+    /// read once for the four lanes.
+    shared: Option<LaneJoint>,
+    /// 1 for the lanes whose chain reaches this level, 0 for padding.
+    active: [f64; LANES],
 }
 
 /// Where one chain's element is at a check: its centre and how far its points reach from it.
@@ -87,20 +99,36 @@ impl ChainLanes {
                 let mut group = Group {
                     chains: [EMPTY; LANES],
                     lengths: [0; LANES],
-                    joints: vec![[LaneJoint::default(); LANES]; chains[members[0]].len()],
+                    levels: Vec::new(),
                 };
                 for (lane, &k) in members.iter().enumerate() {
                     group.chains[lane] = k;
                     group.lengths[lane] = chains[k].len();
-                    for (level, mover) in chains[k].iter().enumerate() {
-                        group.joints[level][lane] = LaneJoint {
-                            index: mover.index,
-                            scale: mover.scale,
-                            link: mover.link,
-                            turns: mover.axis.is_some(),
-                            slides: mover.axis.is_none(),
-                        };
+                }
+                for level in 0..chains[members[0]].len() {
+                    let mut joints = [LaneJoint::default(); LANES];
+                    let mut active = [0.0; LANES];
+                    for (lane, &k) in members.iter().enumerate() {
+                        if let Some(mover) = chains[k].get(level) {
+                            joints[lane] = LaneJoint {
+                                index: mover.index,
+                                scale: mover.scale,
+                                link: mover.link,
+                                turns: mover.axis.is_some(),
+                                slides: mover.axis.is_none(),
+                            };
+                            active[lane] = 1.0;
+                        }
                     }
+                    let first = joints[0];
+                    let shared = (0..LANES)
+                        .all(|lane| active[lane] == 0.0 || joints[lane] == first)
+                        .then_some(first);
+                    group.levels.push(Level {
+                        joints,
+                        shared,
+                        active,
+                    });
                 }
                 group
             })
@@ -133,10 +161,64 @@ fn lanes(f: impl Fn(usize) -> f64) -> f64x4 {
     f64x4::new([f(0), f(1), f(2), f(3)])
 }
 
-/// The squared length of the vector with lanes `x`, `y`, `z`, summed as nalgebra sums it.
+/// The length of the vector with lanes `x`, `y`, `z`, its squares summed as nalgebra sums
+/// them.
 #[inline(always)]
 fn norm(x: f64x4, y: f64x4, z: f64x4) -> f64x4 {
     (x * x + y * y + z * z).sqrt()
+}
+
+/// Each lane's signed turn and the length of its slide at `level` for the joint motion
+/// `step` (0 for padding and for the other kind of joint).
+#[inline(always)]
+fn motions(level: &Level, step: &[f64]) -> (f64x4, f64x4) {
+    if let Some(j) = level.shared {
+        let moved = f64x4::splat(j.scale * step[j.index]);
+        let active = f64x4::new(level.active);
+        return if j.turns {
+            (moved * active, f64x4::ZERO)
+        } else {
+            (f64x4::ZERO, moved.abs() * active)
+        };
+    }
+    let moved = |l: usize, wanted: bool| {
+        let j = level.joints[l];
+        if wanted {
+            j.scale * step[j.index]
+        } else {
+            0.0
+        }
+    };
+    (
+        lanes(|l| moved(l, level.joints[l].turns)),
+        lanes(|l| moved(l, level.joints[l].slides)).abs(),
+    )
+}
+
+/// Each lane's joint axis (0 where it does not turn) and a point on it at `level`.
+#[inline(always)]
+fn joint_frames(level: &Level, axes: &[Vector3<f64>], origins: &[Vector3<f64>]) -> [f64x4; 6] {
+    if let Some(j) = level.shared {
+        let axis = if j.turns {
+            axes[j.link]
+        } else {
+            Vector3::zeros()
+        };
+        let origin = origins[j.link];
+        return [axis.x, axis.y, axis.z, origin.x, origin.y, origin.z].map(f64x4::splat);
+    }
+    let axis = |i: usize| {
+        lanes(|l| {
+            let j = level.joints[l];
+            if j.turns {
+                axes[j.link][i]
+            } else {
+                0.0
+            }
+        })
+    };
+    let origin = |i: usize| lanes(|l| origins[level.joints[l].link][i]);
+    [axis(0), axis(1), axis(2), origin(0), origin(1), origin(2)]
 }
 
 /// [`ChainLanes::bound`] for one group.
@@ -163,17 +245,8 @@ fn bound_group(
     let mut turns: SmallVec<[(f64x4, f64x4); INLINE_LEVELS]> = SmallVec::new();
     let mut rotated: SmallVec<[f64x4; INLINE_LEVELS]> = SmallVec::new();
     let mut total = zero;
-    for joints in &group.joints {
-        let moved = |l: usize, wanted: bool| {
-            let j = joints[l];
-            if wanted {
-                j.scale * step[j.index]
-            } else {
-                0.0
-            }
-        };
-        let turn = lanes(|l| moved(l, joints[l].turns));
-        let slide = lanes(|l| moved(l, joints[l].slides)).abs();
+    for level in &group.levels {
+        let (turn, slide) = motions(level, step);
         total += turn.abs();
         turns.push((turn, slide));
         rotated.push(total);
@@ -183,21 +256,10 @@ fn bound_group(
     let (mut sx, mut sy, mut sz) = (zero, zero, zero);
     let (mut slid, mut stray) = (zero, zero);
     let (mut linear, mut higher) = (zero, zero);
-    for level in (0..group.joints.len()).rev() {
-        let joints = &group.joints[level];
-        let (turn, slide) = turns[level];
-        let axis = |i: usize| {
-            lanes(|l| {
-                if joints[l].turns {
-                    axes[joints[l].link][i]
-                } else {
-                    0.0
-                }
-            })
-        };
-        let origin = |i: usize| lanes(|l| origins[joints[l].link][i]);
-        let (ax, ay, az) = (axis(0), axis(1), axis(2));
-        let (dx, dy, dz) = (px - origin(0), py - origin(1), pz - origin(2));
+    for (m, level) in group.levels.iter().enumerate().rev() {
+        let (turn, slide) = turns[m];
+        let [ax, ay, az, ox, oy, oz] = joint_frames(level, axes, origins);
+        let (dx, dy, dz) = (px - ox, py - oy, pz - oz);
         let (lx, ly, lz) = (ay * dz - az * dy, az * dx - ax * dz, ax * dy - ay * dx);
         let reach = norm(lx, ly, lz) + extent;
         let size = turn.abs();
@@ -211,10 +273,10 @@ fn bound_group(
         slid += slide;
         stray = stray
             + size
-                * (rotated[level] * (half * reach + linear / three + quarter * higher)
+                * (rotated[m] * (half * reach + linear / three + quarter * higher)
                     + half * linear
                     + higher / three)
-            + half * slide * rotated[level];
+            + half * slide * rotated[m];
         let carried_linear = norm(vx, vy, vz) + norm(sx, sy, sz) * extent + slid;
         let carried_higher = stray;
         // The bound beyond grown by this joint's turn or slide.
@@ -226,8 +288,8 @@ fn bound_group(
         higher = carried_wins.select(carried_higher, reached_higher);
         let (linear_lanes, higher_lanes) = (linear.to_array(), higher.to_array());
         for l in 0..LANES {
-            if level < group.lengths[l] {
-                bounds[offsets[group.chains[l]] + level] = Motion {
+            if m < group.lengths[l] {
+                bounds[offsets[group.chains[l]] + m] = Motion {
                     linear: linear_lanes[l],
                     higher: higher_lanes[l],
                 };
@@ -355,18 +417,36 @@ mod tests {
         [-size..size, -size..size, -size..size].prop_map(|[x, y, z]| Vector3::new(x, y, z))
     }
 
+    /// Chains as `arb_chain` makes them, and as many prefixes of one more such chain (the
+    /// chains of one serial arm share their first joints).
+    fn arb_chains() -> impl Strategy<Value = Vec<Vec<Mover>>> {
+        (
+            prop::collection::vec(arb_chain(), 0..6),
+            arb_chain(),
+            prop::collection::vec(0..9usize, 0..7),
+        )
+            .prop_map(|(mut chains, arm, prefixes)| {
+                for length in prefixes {
+                    chains.push(arm[..length.min(arm.len())].to_vec());
+                }
+                chains
+            })
+            .prop_filter("at least one chain", |chains| !chains.is_empty())
+    }
+
     proptest! {
         /// Chains of any lengths (padded in their groups), turning and sliding joints mixed
-        /// within a level, get exactly the bounds each chain computed alone gets, to the last
-        /// bit: the lanes change how the bounds are computed, never what they are.
+        /// within a level or shared by every lane of it, get exactly the bounds each chain
+        /// computed alone gets, to the last bit: the lanes change how the bounds are computed,
+        /// never what they are.
         #[test]
         fn lanes_bound_every_chain_exactly_as_one_chain_at_a_time(
-            chains in prop::collection::vec(arb_chain(), 1..11),
+            chains in arb_chains(),
             step in prop::collection::vec(-1.5..1.5f64, 7),
             axes in prop::collection::vec(arb_vector(1.0), 8),
             origins in prop::collection::vec(arb_vector(1.0), 8),
-            centres in prop::collection::vec(arb_vector(1.0), 11),
-            extents in prop::collection::vec(0.0..0.2f64, 11),
+            centres in prop::collection::vec(arb_vector(1.0), 12),
+            extents in prop::collection::vec(0.0..0.2f64, 12),
         ) {
             let mut offsets = vec![0];
             for chain in &chains {
