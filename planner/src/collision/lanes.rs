@@ -205,7 +205,15 @@ fn joint_frames(level: &Level, axes: &[Vector3<f64>], origins: &[Vector3<f64>]) 
             Vector3::zeros()
         };
         let origin = origins[j.link];
-        return [axis.x, axis.y, axis.z, origin.x, origin.y, origin.z].map(f64x4::splat);
+        let splat = f64x4::splat;
+        return [
+            splat(axis.x),
+            splat(axis.y),
+            splat(axis.z),
+            splat(origin.x),
+            splat(origin.y),
+            splat(origin.z),
+        ];
     }
     let axis = |i: usize| {
         lanes(|l| {
