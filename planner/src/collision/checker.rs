@@ -1,7 +1,7 @@
 //! The checker: one configuration, or a joint-space edge, against the world and the arm
 //! itself.
 
-use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed};
+use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed, BOX_LANES};
 use super::held::Held;
 use super::hit::Hit;
 use super::lanes::Element;
@@ -327,57 +327,64 @@ impl<'a> Checker<'a> {
             let role = model.role(b);
             let mut place: Option<Placement> = None;
             let scene = self.scene;
-            for (index, flat) in scene.boxes.iter().enumerate() {
-                let apart = flat.apart_from(&bounds);
-                if apart && proof.as_ref().is_none_or(|pr| pr.settled(moved, slack)) {
-                    continue;
-                }
-                let o = &scene.obstacles[index];
-                let gap_sq = if apart {
-                    box_gap_sq(&bounds, &o.target.min, &o.target.max)
-                } else {
-                    0.0
+            // Boxes apart: nothing to test, and for a proof nothing to measure where the
+            // boxes' gap settles the stretch (four objects at a time; the fraction proved may
+            // shrink on the way, settling more, so each is asked again).
+            for (group, lanes) in scene.boxes.iter().enumerate() {
+                let (mut todo, gaps) = match proof.as_ref() {
+                    Some(pr) => lanes.within(&bounds, pr.useful_clearance(moved, slack)),
+                    None => (lanes.meeting(&bounds), [0.0; BOX_LANES]),
                 };
-                if contact_rules::link_may_touch(role, &o.name, None, scene.mount(), allow) {
-                    continue;
-                }
-                let Some(pr) = proof.as_mut() else {
-                    let at = place.get_or_insert_with(|| Placement::of(&p.pose));
-                    if o.target.gap(&b.world_spheres, at) > 0.0
-                        || !(o.target.reaches(&b.world_inside, at)
-                            || parry_convert::intersects(
-                                &b.world_shape,
-                                &p.pose,
-                                &o.shape,
-                                &o.pose,
-                            ))
+                while todo != 0 {
+                    let lane = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    let index = group * BOX_LANES + lane;
+                    let (o, gap_sq) = (&scene.obstacles[index], gaps[lane]);
+                    if gap_sq > 0.0
+                        && proof
+                            .as_ref()
+                            .is_some_and(|pr| pr.settled_sq(moved, slack, gap_sq))
                     {
                         continue;
                     }
-                    return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
-                };
-                if gap_sq > 0.0 && pr.settled_sq(moved, slack, gap_sq) {
-                    continue;
-                }
-                let at = place.get_or_insert_with(|| Placement::of(&p.pose));
-                let gap = o.target.gap(&b.world_spheres, at).max(gap_sq.sqrt());
-                if gap > 0.0 {
-                    if !pr.settled(moved, slack + gap) {
-                        nearest.push(Near {
-                            body: k,
-                            obstacle: index,
-                            moved,
-                            slack,
-                            gap,
-                            share: moved.share_within(slack + gap),
-                        });
+                    if contact_rules::link_may_touch(role, &o.name, None, scene.mount(), allow) {
+                        continue;
                     }
-                    continue;
-                }
-                if o.target.reaches(&b.world_inside, at)
-                    || !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack)
-                {
-                    return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                    let Some(pr) = proof.as_mut() else {
+                        let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                        if o.target.gap(&b.world_spheres, at) > 0.0
+                            || !(o.target.reaches(&b.world_inside, at)
+                                || parry_convert::intersects(
+                                    &b.world_shape,
+                                    &p.pose,
+                                    &o.shape,
+                                    &o.pose,
+                                ))
+                        {
+                            continue;
+                        }
+                        return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                    };
+                    let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                    let gap = o.target.gap(&b.world_spheres, at).max(gap_sq.sqrt());
+                    if gap > 0.0 {
+                        if !pr.settled(moved, slack + gap) {
+                            nearest.push(Near {
+                                body: k,
+                                obstacle: index,
+                                moved,
+                                slack,
+                                gap,
+                                share: moved.share_within(slack + gap),
+                            });
+                        }
+                        continue;
+                    }
+                    if o.target.reaches(&b.world_inside, at)
+                        || !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack)
+                    {
+                        return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
+                    }
                 }
             }
         }
@@ -556,24 +563,27 @@ impl<'a> Checker<'a> {
         for (b, p) in self.model.bodies.iter().zip(placed_bodies).rev() {
             let bounds = bounding_box(p, b.world_radius);
             let mut place: Option<Placement> = None;
-            for (flat, o) in scene.boxes.iter().zip(&scene.obstacles) {
-                if flat.apart_from(&bounds) {
-                    continue;
-                }
-                let at = place.get_or_insert_with(|| Placement::of(&p.pose));
-                if o.target.reaches(&b.world_inside, at)
-                    && !contact_rules::link_may_touch(
-                        self.model.role(b),
-                        &o.name,
-                        None,
-                        scene.mount(),
-                        allow,
-                    )
-                {
-                    return Some(Hit::World(
-                        self.robot.links()[b.link].name.clone(),
-                        o.name.clone(),
-                    ));
+            for (group, lanes) in scene.boxes.iter().enumerate() {
+                let mut meeting = lanes.meeting(&bounds);
+                while meeting != 0 {
+                    let lane = meeting.trailing_zeros() as usize;
+                    meeting &= meeting - 1;
+                    let o = &scene.obstacles[group * BOX_LANES + lane];
+                    let at = place.get_or_insert_with(|| Placement::of(&p.pose));
+                    if o.target.reaches(&b.world_inside, at)
+                        && !contact_rules::link_may_touch(
+                            self.model.role(b),
+                            &o.name,
+                            None,
+                            scene.mount(),
+                            allow,
+                        )
+                    {
+                        return Some(Hit::World(
+                            self.robot.links()[b.link].name.clone(),
+                            o.name.clone(),
+                        ));
+                    }
                 }
             }
         }

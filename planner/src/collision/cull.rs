@@ -4,6 +4,7 @@
 use super::model::Body;
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
+use wide::f64x4;
 
 /// A capsule-like body in world coordinates: a segment and a radius.
 #[derive(Debug, Clone, Copy, Default)]
@@ -45,36 +46,80 @@ pub(super) fn bounding_box(p: &Placed, r: f64) -> [Vector3<f64>; 2] {
     [p.a.inf(&p.b) - grow, p.a.sup(&p.b) + grow]
 }
 
-/// A world-axis-aligned box stored flat: a check tests every element's box against every
-/// object's, and the objects' boxes side by side in a short array keep that scan in cache.
+/// Four objects' world-axis-aligned boxes side by side: a check measures every element's box
+/// against every object's, four objects at a time in the lanes of `f64x4` vectors.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct FlatBox {
-    min: [f64; 3],
-    max: [f64; 3],
+pub(super) struct BoxLanes {
+    min: [f64x4; 3],
+    max: [f64x4; 3],
 }
 
-impl FlatBox {
-    /// The box from `min` to `max`.
-    pub(super) fn new(min: &Vector3<f64>, max: &Vector3<f64>) -> FlatBox {
-        FlatBox {
-            min: [min.x, min.y, min.z],
-            max: [max.x, max.y, max.z],
-        }
+/// Objects whose boxes a [`BoxLanes`] holds.
+pub(super) const BOX_LANES: usize = 4;
+
+impl BoxLanes {
+    /// The boxes (lower and upper corners) of `boxes`, four at a time; the spare lanes of the
+    /// last group hold an empty box, infinitely far from every box.
+    pub(super) fn of(boxes: &[[Vector3<f64>; 2]]) -> Vec<BoxLanes> {
+        boxes
+            .chunks(BOX_LANES)
+            .map(|group| {
+                let corner = |c: usize, i: usize, empty: f64| {
+                    f64x4::new(std::array::from_fn(|l| {
+                        group.get(l).map_or(empty, |b| b[c][i])
+                    }))
+                };
+                BoxLanes {
+                    min: std::array::from_fn(|i| corner(0, i, f64::INFINITY)),
+                    max: std::array::from_fn(|i| corner(1, i, f64::NEG_INFINITY)),
+                }
+            })
+            .collect()
     }
 
-    /// Whether the box `b` (min, max) lies apart from this one: exactly when
-    /// [`box_gap_sq`] between them is positive. The six comparisons are all made, without
-    /// branches: most pairs are apart, along an axis no branch predictor can guess.
+    /// The squared gap between the box `b` (lower and upper corners) and each of the four
+    /// (0 where they meet, infinite for an empty lane): [`box_gap_sq`]'s figure to the last
+    /// bit, each lane taking its operations in the same order.
     #[inline(always)]
-    pub(super) fn apart_from(&self, b: &[Vector3<f64>; 2]) -> bool {
-        (b[0].x > self.max[0])
-            | (self.min[0] > b[1].x)
-            | (b[0].y > self.max[1])
-            | (self.min[1] > b[1].y)
-            | (b[0].z > self.max[2])
-            | (self.min[2] > b[1].z)
+    pub(super) fn gaps_sq(&self, b: &[Vector3<f64>; 2]) -> [f64; BOX_LANES] {
+        let axis = |i: usize| {
+            let below = f64x4::splat(b[0][i]) - self.max[i];
+            let above = self.min[i] - f64x4::splat(b[1][i]);
+            let d = below.fast_max(above).fast_max(f64x4::ZERO);
+            d * d
+        };
+        (axis(0) + axis(1) + axis(2)).to_array()
+    }
+
+    /// The lanes whose boxes meet the box `b` (lower and upper corners), as bits (bit l for
+    /// lane l): exactly those whose [`box_gap_sq`] is 0, an empty lane never.
+    #[inline(always)]
+    pub(super) fn meeting(&self, b: &[Vector3<f64>; 2]) -> u32 {
+        let apart = |i: usize| {
+            f64x4::splat(b[0][i]).simd_gt(self.max[i]) | self.min[i].simd_gt(f64x4::splat(b[1][i]))
+        };
+        !(apart(0) | apart(1) | apart(2)).to_bitmask() & LANE_BITS
+    }
+
+    /// The squared gaps of [`BoxLanes::gaps_sq`], and as bits the lanes whose boxes meet the
+    /// box `b` or are less than `useful` from it (`useful` > 0): the objects a proof must look
+    /// at closer when a clearance of `useful` would settle its stretch.
+    #[inline(always)]
+    pub(super) fn within(&self, b: &[Vector3<f64>; 2], useful: f64) -> (u32, [f64; BOX_LANES]) {
+        let gaps = self.gaps_sq(b);
+        let reach_sq = useful * useful;
+        // With nothing (or, its square underflowing, next to nothing) to gain, only the
+        // boxes that meet.
+        if useful <= 0.0 || reach_sq == 0.0 {
+            return (self.meeting(b), gaps);
+        }
+        let near = f64x4::new(gaps).simd_lt(f64x4::splat(reach_sq));
+        (near.to_bitmask() & LANE_BITS, gaps)
     }
 }
+
+/// The bits of a [`BoxLanes`]'s four lanes.
+const LANE_BITS: u32 = (1 << BOX_LANES) - 1;
 
 /// Squared distance between two world-axis-aligned boxes (0 when they overlap).
 pub(super) fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
@@ -163,21 +208,48 @@ mod tests {
     }
 
     proptest::proptest! {
-        /// The flat apart test says apart exactly where the boxes' gap is positive, touching
-        /// boxes included (corners on a coarse grid, so that faces often meet).
+        /// Four boxes side by side give each one's squared gap exactly as `box_gap_sq` does,
+        /// touching faces included (corners on a coarse grid, so that faces often meet); they
+        /// meet the element exactly where that gap is 0, and are within reach of a proof
+        /// exactly where the gap does not settle it; the spare lanes of a short group are
+        /// infinitely far and never meet.
         #[test]
-        fn flat_boxes_are_apart_exactly_where_the_gap_is_positive(
-            a in proptest::array::uniform6(-3i8..4),
-            b in proptest::array::uniform6(-3i8..4),
+        fn box_lanes_give_each_gap_exactly(
+            element in proptest::array::uniform6(-3i8..4),
+            objects in proptest::collection::vec(proptest::array::uniform6(-3i8..4), 1..7),
+            scale in 0.01..1.0f64,
         ) {
             let corners = |c: [i8; 6]| {
-                let v = |i: usize| f64::from(c[i]) * 0.1;
+                let v = |i: usize| f64::from(c[i]) * scale;
                 let (x, y) = (Vector3::new(v(0), v(1), v(2)), Vector3::new(v(3), v(4), v(5)));
                 [x.inf(&y), x.sup(&y)]
             };
-            let (a, b) = (corners(a), corners(b));
-            let flat = FlatBox::new(&b[0], &b[1]);
-            proptest::prop_assert_eq!(flat.apart_from(&a), box_gap_sq(&a, &b[0], &b[1]) > 0.0);
+            let element = corners(element);
+            let boxes: Vec<[Vector3<f64>; 2]> = objects.into_iter().map(corners).collect();
+            let lanes = BoxLanes::of(&boxes);
+            proptest::prop_assert_eq!(lanes.len(), boxes.len().div_ceil(BOX_LANES));
+            for (k, group) in lanes.iter().enumerate() {
+                let gaps = group.gaps_sq(&element);
+                for (l, gap) in gaps.iter().enumerate() {
+                    match boxes.get(k * BOX_LANES + l) {
+                        Some(b) => proptest::prop_assert_eq!(
+                            gap.to_bits(),
+                            box_gap_sq(&element, &b[0], &b[1]).to_bits()
+                        ),
+                        None => proptest::prop_assert_eq!(*gap, f64::INFINITY),
+                    }
+                    let bit = |mask: u32| mask & (1 << l) != 0;
+                    let real = k * BOX_LANES + l < boxes.len();
+                    proptest::prop_assert_eq!(bit(group.meeting(&element)), real && *gap == 0.0);
+                    // A proof skips a box whose gap settles the stretch (`Proof::settled_sq`).
+                    let settled = |useful: f64| *gap > 0.0 && (useful <= 0.0 || *gap >= useful * useful);
+                    for useful in [-0.1, 0.0, 1e-200, 0.5 * scale, scale, 3.0 * scale] {
+                        let (mask, gaps) = group.within(&element, useful);
+                        proptest::prop_assert_eq!(gaps, group.gaps_sq(&element));
+                        proptest::prop_assert_eq!(bit(mask), real && !settled(useful));
+                    }
+                }
+            }
         }
     }
 }

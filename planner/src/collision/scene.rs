@@ -1,6 +1,6 @@
 //! The world as the checks see it: its objects, grown where the rules say, and the robot's base.
 
-use super::cull::FlatBox;
+use super::cull::BoxLanes;
 use super::spheres::Target;
 use crate::parry_convert;
 use akl_scene::World;
@@ -24,8 +24,8 @@ pub(super) struct Obstacle {
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub(super) obstacles: Vec<Obstacle>,
-    /// The obstacles' world-axis-aligned boxes, in the same order, side by side.
-    pub(super) boxes: Vec<FlatBox>,
+    /// The obstacles' world-axis-aligned boxes, in the same order, four to a group.
+    pub(super) boxes: Vec<BoxLanes>,
     pub(super) base: Pose,
     pub(super) mount: Option<usize>,
 }
@@ -55,10 +55,11 @@ impl Scene {
             let inside = |i: usize| origin[i] >= min[i] - 1e-9 && origin[i] <= max[i] + 1e-9;
             inside(0) && inside(1) && (max.z - origin.z).abs() <= akl_scene::SUPPORT_GAP
         });
-        let boxes = obstacles
+        let corners: Vec<_> = obstacles
             .iter()
-            .map(|o| FlatBox::new(&o.target.min, &o.target.max))
+            .map(|o| [o.target.min, o.target.max])
             .collect();
+        let boxes = BoxLanes::of(&corners);
         Scene {
             obstacles,
             boxes,
