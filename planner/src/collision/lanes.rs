@@ -7,7 +7,7 @@
 //! lanes of `f64x4` vectors. Shorter chains of a group are padded with joints that do not move
 //! (a turn of zero), which leaves every bound exactly as a chain computed alone would give it:
 //! each operation is the one a chain alone performs, in the same order, and a padding joint
-//! adds exact zeros. A proof check spends about a fifth of its instructions here.
+//! adds exact zeros. A proof check spends about a quarter of its instructions here.
 //!
 //! The two bounds, from the last joint of a chain to the first (joint j turning by Δⱼ about
 //! the world axis aⱼ through oⱼ, the element's centre at p, its points within `extent` of it):
