@@ -1,7 +1,9 @@
 //! The checker: one configuration, or a joint-space edge, against the world and the arm
 //! itself.
 
-use super::cull::{bounding_box, box_gap_sq, placed, segment_distance_sq, Placed, BOX_LANES};
+use super::cull::{
+    bounding_box, box_gap_sq, placed, segment_distance_sq, set_lanes, Placed, BOX_LANES,
+};
 use super::held::Held;
 use super::hit::Hit;
 use super::lanes::Element;
@@ -120,8 +122,6 @@ impl<'a> Checker<'a> {
         for &(link, axis) in &model.turned {
             axes[link] = poses[link].rotation * axis;
         }
-        let origins: SmallVec<[Vector3<f64>; INLINE_LINKS]> =
-            poses.iter().map(|p| p.translation.vector).collect();
         let element = |k: usize| match (placed_bodies.get(k), model.bodies.get(k)) {
             (Some(p), Some(b)) => Element {
                 centre: p.pose.translation.vector,
@@ -141,7 +141,7 @@ impl<'a> Checker<'a> {
         model.lanes.bound(
             &sweep.step,
             &axes,
-            &origins,
+            poses,
             element,
             &model.offsets,
             &mut sweep.bounds,
@@ -331,13 +331,12 @@ impl<'a> Checker<'a> {
             // boxes' gap settles the stretch (four objects at a time; the fraction proved may
             // shrink on the way, settling more, so each is asked again).
             for (group, lanes) in scene.boxes.iter().enumerate() {
-                let (mut todo, gaps) = match proof.as_ref() {
+                // A plain check looks only at the boxes that meet, and uses no gap.
+                let (todo, gaps) = match proof.as_ref() {
                     Some(pr) => lanes.within(&bounds, pr.useful_clearance(moved, slack)),
                     None => (lanes.meeting(&bounds), [0.0; BOX_LANES]),
                 };
-                while todo != 0 {
-                    let lane = todo.trailing_zeros() as usize;
-                    todo &= todo - 1;
+                for lane in set_lanes(todo) {
                     let index = group * BOX_LANES + lane;
                     let (o, gap_sq) = (&scene.obstacles[index], gaps[lane]);
                     if gap_sq > 0.0
@@ -564,10 +563,7 @@ impl<'a> Checker<'a> {
             let bounds = bounding_box(p, b.world_radius);
             let mut place: Option<Placement> = None;
             for (group, lanes) in scene.boxes.iter().enumerate() {
-                let mut meeting = lanes.meeting(&bounds);
-                while meeting != 0 {
-                    let lane = meeting.trailing_zeros() as usize;
-                    meeting &= meeting - 1;
+                for lane in set_lanes(lanes.meeting(&bounds)) {
                     let o = &scene.obstacles[group * BOX_LANES + lane];
                     let at = place.get_or_insert_with(|| Placement::of(&p.pose));
                     if o.target.reaches(&b.world_inside, at)

@@ -121,6 +121,19 @@ impl BoxLanes {
 /// The bits of a [`BoxLanes`]'s four lanes.
 const LANE_BITS: u32 = (1 << BOX_LANES) - 1;
 
+/// The lanes whose bits are set in `bits` (as [`BoxLanes::meeting`] and [`BoxLanes::within`]
+/// give them), lowest first.
+#[inline(always)]
+pub(super) fn set_lanes(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let lane = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            lane
+        })
+    })
+}
+
 /// Squared distance between two world-axis-aligned boxes (0 when they overlap).
 pub(super) fn box_gap_sq(a: &[Vector3<f64>; 2], min: &Vector3<f64>, max: &Vector3<f64>) -> f64 {
     (a[0] - max)

@@ -28,6 +28,7 @@
 use super::model::Mover;
 use super::sweep::Motion;
 use akl_tsr::nalgebra::Vector3;
+use akl_tsr::Pose;
 use smallvec::SmallVec;
 use wide::f64x4;
 
@@ -138,19 +139,19 @@ impl ChainLanes {
 
     /// Writes the motion bounds of every chain for the joint motion `step` into `bounds`:
     /// `bounds[offsets[k] + m]` for chain k from its m-th joint on (0 past its last).
-    /// `element(k)` places chain k's element; `axes[link]` and `origins[link]` are the world
-    /// axis and a point on it of each link's joint.
+    /// `element(k)` places chain k's element; `axes[link]` is the world axis of each link's
+    /// joint, and the link's pose in `poses` puts its origin on that axis.
     pub(super) fn bound(
         &self,
         step: &[f64],
         axes: &[Vector3<f64>],
-        origins: &[Vector3<f64>],
+        poses: &[Pose],
         element: impl Fn(usize) -> Element,
         offsets: &[usize],
         bounds: &mut [Motion],
     ) {
         for group in &self.groups {
-            bound_group(group, step, axes, origins, &element, offsets, bounds);
+            bound_group(group, step, axes, poses, &element, offsets, bounds);
         }
     }
 }
@@ -197,14 +198,14 @@ fn motions(level: &Level, step: &[f64]) -> (f64x4, f64x4) {
 
 /// Each lane's joint axis (0 where it does not turn) and a point on it at `level`.
 #[inline(always)]
-fn joint_frames(level: &Level, axes: &[Vector3<f64>], origins: &[Vector3<f64>]) -> [f64x4; 6] {
+fn joint_frames(level: &Level, axes: &[Vector3<f64>], poses: &[Pose]) -> [f64x4; 6] {
     if let Some(j) = level.shared {
         let axis = if j.turns {
             axes[j.link]
         } else {
             Vector3::zeros()
         };
-        let origin = origins[j.link];
+        let origin = poses[j.link].translation.vector;
         let splat = f64x4::splat;
         return [
             splat(axis.x),
@@ -225,7 +226,7 @@ fn joint_frames(level: &Level, axes: &[Vector3<f64>], origins: &[Vector3<f64>]) 
             }
         })
     };
-    let origin = |i: usize| lanes(|l| origins[level.joints[l].link][i]);
+    let origin = |i: usize| lanes(|l| poses[level.joints[l].link].translation.vector[i]);
     [axis(0), axis(1), axis(2), origin(0), origin(1), origin(2)]
 }
 
@@ -235,7 +236,7 @@ fn bound_group(
     group: &Group,
     step: &[f64],
     axes: &[Vector3<f64>],
-    origins: &[Vector3<f64>],
+    poses: &[Pose],
     element: &impl Fn(usize) -> Element,
     offsets: &[usize],
     bounds: &mut [Motion],
@@ -266,7 +267,7 @@ fn bound_group(
     let (mut linear, mut higher) = (zero, zero);
     for (m, level) in group.levels.iter().enumerate().rev() {
         let (turn, slide) = turns[m];
-        let [ax, ay, az, ox, oy, oz] = joint_frames(level, axes, origins);
+        let [ax, ay, az, ox, oy, oz] = joint_frames(level, axes, poses);
         let (dx, dy, dz) = (px - ox, py - oy, pz - oz);
         let (lx, ly, lz) = (ay * dz - az * dy, az * dx - ax * dz, ax * dy - ay * dx);
         let reach = norm(lx, ly, lz) + extent;
@@ -362,7 +363,7 @@ mod tests {
         chains: &[Vec<Mover>],
         step: &[f64],
         axes: &[Vector3<f64>],
-        origins: &[Vector3<f64>],
+        poses: &[Pose],
         element: impl Fn(usize) -> Element,
         offsets: &[usize],
         bounds: &mut [Motion],
@@ -385,7 +386,7 @@ mod tests {
                 let turn = mover.scale * step[mover.index];
                 let reached = if mover.axis.is_some() {
                     let axis = axes[mover.link];
-                    let lever = axis.cross(&(centre - origins[mover.link]));
+                    let lever = axis.cross(&(centre - poses[mover.link].translation.vector));
                     let reach = lever.norm() + extent;
                     velocity.turn(turn, &lever, &axis, reach, rotated[m], beyond);
                     beyond.turned(reach, turn.abs())
@@ -463,9 +464,10 @@ mod tests {
             let element = |k: usize| Element { centre: centres[k], extent: extents[k] };
             let slots = *offsets.last().unwrap();
             let mut expected = vec![Motion { linear: -1.0, higher: -1.0 }; slots];
-            one_at_a_time(&chains, &step, &axes, &origins, element, &offsets, &mut expected);
+            let poses: Vec<Pose> = origins.iter().map(|o| Pose::from_parts((*o).into(), Default::default())).collect();
+            one_at_a_time(&chains, &step, &axes, &poses, element, &offsets, &mut expected);
             let mut found = vec![Motion { linear: -2.0, higher: -2.0 }; slots];
-            ChainLanes::new(&chains).bound(&step, &axes, &origins, element, &offsets, &mut found);
+            ChainLanes::new(&chains).bound(&step, &axes, &poses, element, &offsets, &mut found);
             for (slot, (e, f)) in expected.iter().zip(&found).enumerate() {
                 prop_assert_eq!(e.linear.to_bits(), f.linear.to_bits(), "slot {}", slot);
                 prop_assert_eq!(e.higher.to_bits(), f.higher.to_bits(), "slot {}", slot);
