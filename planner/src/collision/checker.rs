@@ -85,8 +85,7 @@ impl<'a> Checker<'a> {
         if !self.within_limits(q) {
             return Some(Hit::Limits);
         }
-        self.probe::<false, false>(q, width, held, allow, None)
-            .err()
+        self.probe::<false>(q, width, held, allow, None).err()
     }
 
     pub(super) fn within_limits(&self, q: &[f64]) -> bool {
@@ -205,11 +204,8 @@ impl<'a> Checker<'a> {
     /// The first collision of `q` (within the joint limits), or, when `PROVE` is set and
     /// `sweep` holds the joint motion of a stretch about `q`, the fraction of that stretch
     /// proved free (see the module documentation). Plain checks are compiled without the
-    /// proof's work. With `WORLD_FIRST` (plain checks only), a collision with the world that
-    /// balls inside the elements make certain is looked for first, hand first: cheaper where
-    /// most configurations collide (a screen's), though the collision found may then be
-    /// another than the one the usual order reports.
-    pub(super) fn probe<const PROVE: bool, const WORLD_FIRST: bool>(
+    /// proof's work.
+    pub(super) fn probe<const PROVE: bool>(
         &self,
         q: &[f64],
         width: f64,
@@ -235,11 +231,6 @@ impl<'a> Checker<'a> {
                 fraction: 1.0,
             }
         });
-        if WORLD_FIRST && !PROVE {
-            if let Some(hit) = self.certain_world_hit(placed_bodies, allow) {
-                return Err(hit);
-            }
-        }
         let m = model.margins;
         // Self collision: bounding balls, then segment distance, then parry.
         let self_slack = 0.5 * m.self_;
@@ -500,8 +491,8 @@ impl<'a> Checker<'a> {
         self.screened_edge(a, b, width, held, allow, 0)
     }
 
-    /// [`Checker::edge`], after plain checks at `points` points of the edge
-    /// ([`Checker::screen`]): a collision there rejects the edge before any proof.
+    /// [`Checker::edge`], after a screen of `points` points of the edge
+    /// ([`Checker::screen`]): a collision found there rejects the edge before any proof.
     pub(crate) fn screened_edge(
         &self,
         a: &[f64],
@@ -514,7 +505,7 @@ impl<'a> Checker<'a> {
         if !self.within_limits(a) || !self.within_limits(b) {
             return Some(Hit::Limits);
         }
-        if let Some(hit) = self.screen(a, b, width, held, allow, points) {
+        if let Some(hit) = self.screen(a, b, width, allow, points) {
             return Some(hit);
         }
         let mut sweep = Sweep::new(self.model, a.len());
@@ -524,7 +515,7 @@ impl<'a> Checker<'a> {
         // Each end proves a stretch into the edge (the bound covers the whole edge about it).
         let mut ends = [0.0; 2];
         for (end, q) in ends.iter_mut().zip([b, a]) {
-            match self.probe::<true, false>(q, width, held, allow, Some(&mut sweep)) {
+            match self.probe::<true>(q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => *end = fraction,
                 Err(hit) => return Some(hit),
             }
@@ -542,7 +533,7 @@ impl<'a> Checker<'a> {
                 sweep.step[i] = half * (b[i] - a[i]);
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            let proved = match self.probe::<true, false>(&q, width, held, allow, Some(&mut sweep)) {
+            let proved = match self.probe::<true>(&q, width, held, allow, Some(&mut sweep)) {
                 Ok(fraction) => half * fraction,
                 Err(hit) => return Some(hit),
             };
@@ -586,17 +577,21 @@ impl<'a> Checker<'a> {
         None
     }
 
-    /// The first collision at `points` points of the edge from `a` to `b`, taken in
-    /// bisection order from `b` (1, 1/2, 1/4, 3/4, 1/8, ...), by plain checks. A proof's
-    /// checks measure clearances and stop only where one is negative; a blocked edge often
-    /// shows its collision at one of these points, found at a fraction of the cost. Both ends
-    /// must be within the joint limits ([`Checker::screened_edge`] checks them).
+    /// A collision of the arm with the world that balls inside its elements make certain
+    /// ([`Checker::certain_world_hit`]) at one of `points` points of the edge from `a` to
+    /// `b`, taken in bisection order from `b` (1, 1/2, 1/4, 3/4, 1/8, ...). A proof's checks
+    /// measure clearances and stop only where one is negative; a blocked edge usually shows
+    /// such a collision at one of these points, found for the price of placing the arm. The
+    /// screen looks for nothing else (not the held object, not the arm against itself, no
+    /// exact test): what it misses the proof finds, and a full plain check at a point the
+    /// proof then measures again cost three times as much (BENCHMARKS.md, "A screen of
+    /// certain collisions"). Both ends must be within the joint limits
+    /// ([`Checker::screened_edge`] checks them).
     pub(super) fn screen(
         &self,
         a: &[f64],
         b: &[f64],
         width: f64,
-        held: Option<&Held>,
         allow: &Allowances,
         points: usize,
     ) -> Option<Hit> {
@@ -610,7 +605,13 @@ impl<'a> Checker<'a> {
                 *v = x + t * (y - x);
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            if let Err(hit) = self.probe::<false, true>(&q, width, held, allow, None) {
+            if let Some(probes) = self.probes {
+                probes.set(probes.get() + 1);
+            }
+            let mut poses = LinkPoses::new();
+            let mut placed_bodies = PlacedBodies::new();
+            self.place_into(&q, width, &mut poses, &mut placed_bodies);
+            if let Some(hit) = self.certain_world_hit(&placed_bodies, allow) {
                 return Some(hit);
             }
         }
