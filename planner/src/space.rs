@@ -44,8 +44,9 @@ impl Space<'_> {
         self.edge(a, b).is_none()
     }
 
-    /// Whether the straight edge from `a` to `b` is collision-free, after plain checks at
-    /// `points` of its points (see [`Checker::screened_edge`]) that reject it if any collides.
+    /// Whether the straight edge from `a` to `b` is collision-free, after a screen of
+    /// `points` of its points (see [`Checker::screened_edge`]) that rejects it on a collision
+    /// found there.
     pub(crate) fn screened_edge_valid(&self, a: &[f64], b: &[f64], points: usize) -> bool {
         self.checker
             .screened_edge(a, b, self.width, self.held, self.allow, points)
