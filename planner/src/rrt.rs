@@ -7,8 +7,8 @@
 //! trees, which always grow the smaller one. A node from which extensions keep failing
 //! takes shorter steps, so that a tree started in a pocket (a goal between a grasped can
 //! and a shelf's wall) creeps out of it instead of trying one long step after another.
-//! Edges are screened by plain checks before they are proved free, as many as the share of
-//! blocked edges so far makes worth it.
+//! Edges are screened for certain collisions at a few points before they are proved free, as
+//! many as the share of blocked edges so far makes worth it.
 
 use crate::space::{distance, Space};
 use rand::Rng;
@@ -168,7 +168,7 @@ impl Tree {
     }
 }
 
-/// How many plain checks an edge gets before its proof, from how often the edges tried so
+/// How many points of an edge are screened before its proof, from how often the edges tried so
 /// far were blocked: screening (see [`Space::screened_edge_valid`]) pays where most edges
 /// are blocked and is overhead where most are free.
 #[derive(Debug, Default)]
