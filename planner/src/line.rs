@@ -271,7 +271,7 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let mut start = vec![0.0; robot.dof()];
             loop {
-                space.sample(&mut rng, &mut start);
+                space.sampler().fill(&mut rng, &mut start);
                 if space.valid(&start) {
                     break;
                 }

@@ -348,9 +348,10 @@ pub fn rrt_connect<R: Rng + ?Sized>(
     // `a_is_start` tracks which tree grows from the start after the swaps.
     let mut a_is_start = true;
     let mut sample = vec![0.0; dof];
+    let sampler = space.sampler();
     let mut screening = Screening::default();
     for iteration in 1..=options.max_iterations {
-        space.sample(rng, &mut sample);
+        sampler.fill(rng, &mut sample);
         let domain = options.dynamic_domain.as_ref();
         if let Extend::Advanced(new) | Extend::Reached(new) = extend(
             &mut a,
@@ -621,10 +622,11 @@ mod tests {
         };
         for seed in (0..16u64).chain([82996]) {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let sampler = space.sampler();
             let mut free = || {
                 let mut q = vec![0.0; robot.dof()];
                 loop {
-                    space.sample(&mut rng, &mut q);
+                    sampler.fill(&mut rng, &mut q);
                     if space.valid(&q) {
                         return q;
                     }
