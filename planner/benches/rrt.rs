@@ -173,11 +173,12 @@ fn goal_biased_rrt(
     }
     let mut nodes: Vec<Vec<f64>> = vec![start.to_vec()];
     let mut sample = vec![0.0; start.len()];
+    let sampler = space.sampler();
     for _ in 0..options.max_iterations {
         if rng.gen_bool(0.1) {
             sample.copy_from_slice(goal);
         } else {
-            space.sample(rng, &mut sample);
+            sampler.fill(rng, &mut sample);
         }
         let near = nodes
             .iter()
