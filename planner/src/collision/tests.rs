@@ -232,6 +232,30 @@ mod checks {
         assert_eq!(checker.check(&q, 0.05, Some(&held), &allow), None);
     }
 
+    /// The edge that turns the base joint from `by` radians one way of the ready pose to
+    /// `by` the other way.
+    fn base_turned_about_ready(robot: &Robot, by: f64) -> (Vec<f64>, Vec<f64>) {
+        let mut a = robot.ready().to_vec();
+        let mut b = a.clone();
+        a[0] -= by;
+        b[0] += by;
+        (a, b)
+    }
+
+    /// The pick-and-place world with a fixed box `name` of `size` centred at `at`.
+    fn pick_place_with_box(name: &str, size: [f64; 3], at: [f64; 3]) -> World {
+        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
+        world.objects.push(akl_scene::Object {
+            name: name.into(),
+            shape: akl_scene::Shape::Box { size },
+            pose: akl_tsr::pose::pose_from_xyz(at),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        world
+    }
+
     /// A block inside the palm at the middle of an edge: the screen finds the hand in it
     /// (balls inside the hand reach it, so no exact test is needed), and where the hand may
     /// touch the block the screen and the proof find nothing.
@@ -239,10 +263,7 @@ mod checks {
     fn screening_keeps_to_what_the_hand_may_touch() {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
-        let mut a = robot.ready().to_vec();
-        let mut b = a.clone();
-        a[0] -= 0.3;
-        b[0] += 0.3;
+        let (a, b) = base_turned_about_ready(&robot, 0.3);
         let hand = robot
             .links()
             .iter()
@@ -250,17 +271,7 @@ mod checks {
             .unwrap();
         let palm = robot.link_poses(robot.ready(), 0.08)[hand]
             * akl_tsr::nalgebra::Point3::new(0.0, 0.0, 0.04);
-        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
-        world.objects.push(akl_scene::Object {
-            name: "block".into(),
-            shape: akl_scene::Shape::Box {
-                size: [0.02, 0.02, 0.02],
-            },
-            pose: akl_tsr::pose::pose_from_xyz([palm.x, palm.y, palm.z]),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
+        let world = pick_place_with_box("block", [0.02; 3], [palm.x, palm.y, palm.z]);
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(&robot, &model, &scene);
         match checker.screen(&a, &b, 0.08, &none(), 2) {
@@ -288,22 +299,9 @@ mod checks {
     fn screening_finds_a_collision_inside_an_edge_whose_ends_are_free() {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
-        let mut a = robot.ready().to_vec();
-        let mut b = a.clone();
-        a[0] -= 0.6;
-        b[0] += 0.6;
+        let (a, b) = base_turned_about_ready(&robot, 0.6);
         let tcp = robot.tcp_pose(robot.ready()).translation.vector;
-        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
-        world.objects.push(akl_scene::Object {
-            name: "post".into(),
-            shape: akl_scene::Shape::Box {
-                size: [0.03, 0.03, 0.3],
-            },
-            pose: akl_tsr::pose::pose_from_xyz([tcp.x, tcp.y, tcp.z]),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
+        let world = pick_place_with_box("post", [0.03, 0.03, 0.3], [tcp.x, tcp.y, tcp.z]);
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(&robot, &model, &scene);
         assert_eq!(checker.check(&a, 0.08, None, &none()), None);
@@ -333,26 +331,13 @@ mod checks {
     fn the_screen_leaves_the_held_object_to_the_proof() {
         let robot = Robot::panda().unwrap();
         let model = RobotCollision::new(&robot);
-        let mut a = robot.ready().to_vec();
-        let mut b = a.clone();
-        a[0] -= 0.4;
-        b[0] += 0.4;
+        let (a, b) = base_turned_about_ready(&robot, 0.4);
         let tcp = robot.tcp_pose(robot.ready());
         let in_tcp = Pose::from_parts([0.0, 0.0, 0.1].into(), Default::default());
         let centre = (tcp * in_tcp).translation.vector;
         let ball = akl_scene::Shape::Sphere { radius: 0.03 };
         let held = Held::new("ball", ball, in_tcp, &model.margins());
-        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
-        world.objects.push(akl_scene::Object {
-            name: "block".into(),
-            shape: akl_scene::Shape::Box {
-                size: [0.02, 0.02, 0.02],
-            },
-            pose: akl_tsr::pose::pose_from_xyz([centre.x, centre.y, centre.z]),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
+        let world = pick_place_with_box("block", [0.02; 3], [centre.x, centre.y, centre.z]);
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(&robot, &model, &scene);
         assert_eq!(checker.check(robot.ready(), 0.08, None, &none()), None);
