@@ -138,16 +138,12 @@ impl Tree {
         }
     }
 
+    /// The node nearest `q` (the first of equals), by a scan of the flat node array.
     fn nearest(&self, q: &[f64]) -> usize {
         let mut best = 0;
         let mut best_d = f64::INFINITY;
-        for i in 0..self.len() {
-            let d: f64 = self
-                .node(i)
-                .iter()
-                .zip(q)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum();
+        for (i, node) in self.nodes.chunks_exact(self.dof).enumerate() {
+            let d: f64 = node.iter().zip(q).map(|(a, b)| (a - b) * (a - b)).sum();
             if d < best_d {
                 best_d = d;
                 best = i;
