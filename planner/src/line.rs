@@ -270,8 +270,9 @@ mod tests {
             let space = Space { checker: &checker, width: robot.open_width(), held: None, allow: &allow };
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let mut start = vec![0.0; robot.dof()];
+            let sampler = space.sampler();
             loop {
-                space.sampler().fill(&mut rng, &mut start);
+                sampler.fill(&mut rng, &mut start);
                 if space.valid(&start) {
                     break;
                 }

@@ -189,11 +189,10 @@ impl Screening {
     }
 
     /// Points to screen on an edge `length` long: `share` (0 to 1) of what it gets when every
-    /// edge so far was blocked. The direct edge from the start to a
-    /// goal gets the whole of it: a search is run because the way is not clear, and
-    /// MotionBenchMaker's direct edges showed it (its 912 runs each took 0.89 to 0.98 of the
-    /// time unscreened, with every search the same; BENCHMARKS.md, "A screen of certain
-    /// collisions").
+    /// edge so far was blocked. The direct edge from the start to a goal gets the whole of
+    /// it: a search is run because the way is not clear, and MotionBenchMaker's direct edges
+    /// showed it (per-run time 0.89 to 0.98 of the unscreened edge's, round by round, with
+    /// every search the same; BENCHMARKS.md, "A screen of certain collisions").
     fn points_if_blocked(length: f64, share: f64) -> usize {
         ((length * SCREEN_PER_RADIAN * share) as usize).min(SCREEN_MAX)
     }
@@ -616,9 +615,9 @@ mod tests {
             held: None,
             allow: &allow,
         };
+        let sampler = space.sampler();
         for seed in (0..16u64).chain([82996]) {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            let sampler = space.sampler();
             let mut free = || {
                 let mut q = vec![0.0; robot.dof()];
                 loop {

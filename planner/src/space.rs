@@ -68,6 +68,7 @@ pub struct Sampler {
 }
 
 impl Sampler {
+    /// Draws each joint within its `[lower, upper]` limits.
     fn within(limits: &[[f64; 2]]) -> Sampler {
         Sampler {
             joints: limits

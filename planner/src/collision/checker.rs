@@ -68,6 +68,13 @@ impl<'a> Checker<'a> {
         }
     }
 
+    /// Adds one to the probes counted, if they are ([`Checker::counting`]).
+    fn count_probe(&self) {
+        if let Some(probes) = self.probes {
+            probes.set(probes.get() + 1);
+        }
+    }
+
     /// The robot.
     pub fn robot(&self) -> &'a Robot {
         self.robot
@@ -213,9 +220,7 @@ impl<'a> Checker<'a> {
         allow: &Allowances,
         sweep: Option<&mut Sweep>,
     ) -> Result<f64, Hit> {
-        if let Some(probes) = self.probes {
-            probes.set(probes.get() + 1);
-        }
+        self.count_probe();
         let links = self.robot.links();
         let mut poses = LinkPoses::new();
         let mut placed_bodies = PlacedBodies::new();
@@ -552,19 +557,14 @@ impl<'a> Checker<'a> {
         let scene = self.scene;
         for (b, p) in self.model.bodies.iter().zip(placed_bodies).rev() {
             let bounds = bounding_box(p, b.world_radius);
+            let role = self.model.role(b);
             let mut place: Option<Placement> = None;
             for (group, lanes) in scene.boxes.iter().enumerate() {
                 for lane in set_lanes(lanes.meeting(&bounds)) {
                     let o = &scene.obstacles[group * BOX_LANES + lane];
                     let at = place.get_or_insert_with(|| Placement::of(&p.pose));
                     if o.target.reaches(&b.world_inside, at)
-                        && !contact_rules::link_may_touch(
-                            self.model.role(b),
-                            &o.name,
-                            None,
-                            scene.mount(),
-                            allow,
-                        )
+                        && !contact_rules::link_may_touch(role, &o.name, None, scene.mount(), allow)
                     {
                         return Some(Hit::World(
                             self.robot.links()[b.link].name.clone(),
@@ -605,9 +605,7 @@ impl<'a> Checker<'a> {
                 *v = x + t * (y - x);
             }
             // Within the joint limits: the ends are, and the limits are a box.
-            if let Some(probes) = self.probes {
-                probes.set(probes.get() + 1);
-            }
+            self.count_probe();
             let mut poses = LinkPoses::new();
             let mut placed_bodies = PlacedBodies::new();
             self.place_into(&q, width, &mut poses, &mut placed_bodies);
