@@ -448,8 +448,12 @@ impl<'a> Checker<'a> {
         }
         if let Some(pr) = proof.as_mut() {
             // The least promising first: once one is settled by its bound, so are the rest.
-            nearest.sort_unstable_by(|x, y| x.share.total_cmp(&y.share));
-            for n in &nearest {
+            // Picked one at a time rather than sorted: the loop ends at the first settled
+            // pair, and the pairs after it need no order.
+            while let Some(at) =
+                (0..nearest.len()).min_by(|&x, &y| nearest[x].share.total_cmp(&nearest[y].share))
+            {
+                let n = nearest.swap_remove(at);
                 if pr.settled(n.moved, n.slack + n.gap) {
                     break;
                 }
