@@ -162,6 +162,12 @@ fn the_table_counts_failures_by_cause_and_a_failed_trial_exits_1() {
     ] {
         assert!(out.contains(row), "no `{row}` in\n{out}");
     }
+    // Planning takes milliseconds: the time per trial is printed to a tenth of one.
+    let timing = out.lines().find(|l| l.starts_with("time per trial"));
+    assert!(
+        timing.is_some_and(|l| l.contains(" ms (planning ") && l.contains(" ms, simulation ")),
+        "time per trial not in milliseconds in\n{out}"
+    );
     assert!(text(&o.stderr).contains("2 of 2 trials failed"));
 }
 

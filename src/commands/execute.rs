@@ -473,8 +473,10 @@ pub(crate) fn print_executed<T: TrialOutcome>(x: &Executed<T>) {
     row(
         "time per trial",
         format!(
-            "{:.3} s (planning {:.3} s, simulation {:.3} s)",
-            r.seconds_per_trial, r.plan_seconds_per_trial, r.sim_seconds_per_trial
+            "{:.1} ms (planning {:.1} ms, simulation {:.1} ms)",
+            r.seconds_per_trial * 1e3,
+            r.plan_seconds_per_trial * 1e3,
+            r.sim_seconds_per_trial * 1e3
         ),
     );
     row(
