@@ -164,9 +164,10 @@ impl Tree {
     }
 }
 
-/// How many points of an edge are screened before its proof, from how often the edges tried so
-/// far were blocked: screening (see [`Space::screened_edge_valid`]) pays where most edges
-/// are blocked and is overhead where most are free.
+/// How many points of an edge are screened before its proof (the end first, which the edge's
+/// plain check of it covers), from how often the edges tried so far were blocked: screening
+/// (see [`Space::screened_edge_valid`]) pays where most edges are blocked and is overhead
+/// where most are free.
 #[derive(Debug, Default)]
 struct Screening {
     tried: u32,

@@ -47,7 +47,8 @@ impl Space<'_> {
 
     /// Whether the straight edge from `a` to `b` is collision-free, after a screen of
     /// `points` of its points (see [`Checker::screened_edge`]) that rejects it on a collision
-    /// found there.
+    /// found there. `a` must already be known to be valid (a search's node): it is not
+    /// checked again.
     pub(crate) fn screened_edge_valid(&self, a: &[f64], b: &[f64], points: usize) -> bool {
         self.checker
             .screened_edge(a, b, self.width, self.held, self.allow, points)

@@ -256,9 +256,10 @@ mod checks {
         world
     }
 
-    /// A block inside the palm at the middle of an edge: the screen finds the hand in it
-    /// (balls inside the hand reach it, so no exact test is needed), and where the hand may
-    /// touch the block the screen and the proof find nothing.
+    /// A block in the hand's palm at the middle of an edge: the screen finds the hand in it
+    /// at a point it screens (balls inside the hand reach it there, a quarter of the way,
+    /// so no exact test is needed), and where the hand may touch the block the screen and
+    /// the proof find nothing.
     #[test]
     fn screening_keeps_to_what_the_hand_may_touch() {
         let robot = Robot::panda().unwrap();
@@ -274,7 +275,7 @@ mod checks {
         let world = pick_place_with_box("block", [0.02; 3], [palm.x, palm.y, palm.z]);
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(&robot, &model, &scene);
-        match checker.screen(&a, &b, 0.08, &none(), 2) {
+        match checker.screen(&a, &b, 0.08, &none(), 3) {
             Some(Hit::World(link, object)) => {
                 assert_eq!((link.as_str(), object.as_str()), ("fer_hand", "block"));
             }
@@ -292,8 +293,9 @@ mod checks {
     }
 
     /// Screening finds a post in the way of an edge whose ends are free, at the edge's
-    /// middle (its second point), and reports what hit it; with only the end screened it
-    /// finds nothing, and the proof alone finds the post too. An end beyond the joint limits
+    /// middle (its second point), and reports what hit it; with one point, the end, which it
+    /// leaves to the edge's plain check, it finds nothing, and the proof alone finds the post
+    /// too. An end beyond the joint limits
     /// is reported as such.
     #[test]
     fn screening_finds_a_collision_inside_an_edge_whose_ends_are_free() {
@@ -322,6 +324,53 @@ mod checks {
                 other => panic!("expected the post, got {other:?}"),
             }
         }
+    }
+
+    /// An edge's ends keep their whole margins where the rest of it keeps half: a plate just
+    /// inside the hand's margin under the fingers at the edge's start rejects the edge (at
+    /// either end), while the same edge from a start taken as known to be valid, as a search
+    /// takes its nodes, is proved free (the fingers leave the plate at once).
+    #[test]
+    fn edges_keep_the_whole_margin_at_their_ends() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let a = robot.ready().to_vec();
+        let mut b = a.clone();
+        b[1] -= 0.3;
+        let tcp = robot.tcp_pose(&a).translation.vector;
+        let plate = |z: f64| pick_place_with_box("plate", [0.3, 0.3, 0.01], [tcp.x, tcp.y, z]);
+        let meets = |z: f64| {
+            let scene = Scene::new(&plate(z), &[]);
+            Checker::new(&robot, &model, &scene)
+                .check(&a, 0.08, None, &none())
+                .is_some()
+        };
+        // The highest plate the start's plain check passes, to a micrometre.
+        let (mut free, mut hit) = (tcp.z - 0.2, tcp.z);
+        assert!(!meets(free) && meets(hit));
+        while hit - free > 1e-6 {
+            let z = 0.5 * (free + hit);
+            if meets(z) {
+                hit = z;
+            } else {
+                free = z;
+            }
+        }
+        let world = plate(hit);
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        assert_eq!(checker.check(&b, 0.08, None, &none()), None);
+        for edge in [
+            checker.edge(&a, &b, 0.08, None, &none()),
+            checker.edge(&b, &a, 0.08, None, &none()),
+            checker.screened_edge(&b, &a, 0.08, None, &none(), 0),
+        ] {
+            match edge {
+                Some(Hit::World(_, object)) => assert_eq!(object, "plate"),
+                other => panic!("expected the plate, got {other:?}"),
+            }
+        }
+        assert_eq!(checker.screened_edge(&a, &b, 0.08, None, &none(), 0), None);
     }
 
     /// The screen looks only for the arm's own certain collisions: a block that only the held
