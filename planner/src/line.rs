@@ -206,7 +206,13 @@ impl Line<'_> {
             let halfway = path[path.len() - 1].clone();
             return self.extend(space, path, &halfway, mid, s, bisections - 1);
         }
-        if let Some(hit) = space.edge(previous, &q) {
+        // Past the line's start, `previous` is the end of the edge before, checked there.
+        let hit = if path.len() > 1 {
+            space.edge_from_valid(previous, &q)
+        } else {
+            space.edge(previous, &q)
+        };
+        if let Some(hit) = hit {
             return Err(LineFailure::Collision { at: s, hit });
         }
         path.push(q);

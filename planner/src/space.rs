@@ -40,6 +40,13 @@ impl Space<'_> {
         self.checker.edge(a, b, self.width, self.held, self.allow)
     }
 
+    /// [`Space::edge`] for an edge whose start `a` is already known to be valid (the end of
+    /// the edge before it, in a chain of edges): `a` is not checked again.
+    pub(crate) fn edge_from_valid(&self, a: &[f64], b: &[f64]) -> Option<Hit> {
+        self.checker
+            .screened_edge(a, b, self.width, self.held, self.allow, 0)
+    }
+
     /// Whether the straight edge from `a` to `b` is collision-free.
     pub fn edge_valid(&self, a: &[f64], b: &[f64]) -> bool {
         self.edge(a, b).is_none()

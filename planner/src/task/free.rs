@@ -4,7 +4,7 @@
 use super::{
     backed_off, centred_in_hand, grasp_width, line_error, Event, GoalPaths, PlannedLine, Planner,
 };
-use crate::collision::{Checker, Held, Scene};
+use crate::collision::{Checker, Held, Hit, Scene};
 use crate::contact_rules::{Allowances, Step};
 use crate::error::PlanError;
 use crate::goal::{find_fitted_goals, GoalFailure};
@@ -220,10 +220,8 @@ impl Planner<'_> {
                     ..Step::default()
                 }
                 .allowances();
-                for w in approach.windows(2).rev() {
-                    if let Some(hit) = checker.edge(&w[1], &w[0], width, Some(&held), &allow) {
-                        return Err(format!("lift: {hit}"));
-                    }
+                if let Some(hit) = chain_hit(&checker, approach, width, Some(&held), &allow) {
+                    return Err(format!("lift: {hit}"));
                 }
                 Ok(())
             }
@@ -242,15 +240,32 @@ impl Planner<'_> {
                     ..Step::default()
                 }
                 .allowances();
-                for w in approach.windows(2).rev() {
-                    let open = self.robot.open_width();
-                    if let Some(hit) = checker.edge(&w[1], &w[0], open, None, &allow) {
-                        return Err(format!("retreat: {hit}"));
-                    }
+                let open = self.robot.open_width();
+                if let Some(hit) = chain_hit(&checker, approach, open, None, &allow) {
+                    return Err(format!("retreat: {hit}"));
                 }
                 Ok(())
             }
             _ => Ok(()),
         }
     }
+}
+
+/// The first collision on the chain of edges through `points` from the last back to the first
+/// (opening `width`, holding `held`, under `allow`): every edge starts where the one before it
+/// ended, so only the chain's first point gets a check of its own.
+fn chain_hit(
+    checker: &Checker,
+    points: &[Vec<f64>],
+    width: f64,
+    held: Option<&Held>,
+    allow: &Allowances,
+) -> Option<Hit> {
+    points.windows(2).rev().enumerate().find_map(|(k, w)| {
+        if k == 0 {
+            checker.edge(&w[1], &w[0], width, held, allow)
+        } else {
+            checker.screened_edge(&w[1], &w[0], width, held, allow, 0)
+        }
+    })
 }
