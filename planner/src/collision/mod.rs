@@ -48,7 +48,7 @@ mod spheres;
 mod stored;
 mod sweep;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use checker::Checker;
 pub use exact::ExactShape;

@@ -8,6 +8,51 @@ use crate::robot::Robot;
 use akl_scene::World;
 use akl_tsr::Pose;
 
+/// The pick-and-place world with a plate under the fingers at `q`, raised (to a micrometre)
+/// until `q`'s plain check just meets it: the hand keeps more than half its margin from the
+/// plate, but not all of it.
+pub(crate) fn plate_just_within_the_margin(
+    robot: &Robot,
+    model: &RobotCollision,
+    q: &[f64],
+) -> World {
+    let tcp = robot.tcp_pose(q).translation.vector;
+    let plate = |z: f64| {
+        let mut world = akl_scene::builtin::task("pick_place")
+            .unwrap()
+            .unwrap()
+            .world;
+        world.objects.push(akl_scene::Object {
+            name: "plate".into(),
+            shape: akl_scene::Shape::Box {
+                size: [0.3, 0.3, 0.01],
+            },
+            pose: akl_tsr::pose::pose_from_xyz([tcp.x, tcp.y, z]),
+            movable: false,
+            mass: 0.0,
+            friction: 0.5,
+        });
+        world
+    };
+    let meets = |z: f64| {
+        let scene = Scene::new(&plate(z), &[]);
+        Checker::new(robot, model, &scene)
+            .check(q, 0.08, None, &Allowances::default())
+            .is_some()
+    };
+    let (mut free, mut hit) = (tcp.z - 0.2, tcp.z);
+    assert!(!meets(free) && meets(hit));
+    while hit - free > 1e-6 {
+        let z = 0.5 * (free + hit);
+        if meets(z) {
+            hit = z;
+        } else {
+            free = z;
+        }
+    }
+    plate(hit)
+}
+
 mod checks {
     use super::*;
     use akl_scene::builtin;
@@ -337,26 +382,7 @@ mod checks {
         let a = robot.ready().to_vec();
         let mut b = a.clone();
         b[1] -= 0.3;
-        let tcp = robot.tcp_pose(&a).translation.vector;
-        let plate = |z: f64| pick_place_with_box("plate", [0.3, 0.3, 0.01], [tcp.x, tcp.y, z]);
-        let meets = |z: f64| {
-            let scene = Scene::new(&plate(z), &[]);
-            Checker::new(&robot, &model, &scene)
-                .check(&a, 0.08, None, &none())
-                .is_some()
-        };
-        // The highest plate the start's plain check passes, to a micrometre.
-        let (mut free, mut hit) = (tcp.z - 0.2, tcp.z);
-        assert!(!meets(free) && meets(hit));
-        while hit - free > 1e-6 {
-            let z = 0.5 * (free + hit);
-            if meets(z) {
-                hit = z;
-            } else {
-                free = z;
-            }
-        }
-        let world = plate(hit);
+        let world = plate_just_within_the_margin(&robot, &model, &a);
         let scene = Scene::new(&world, &[]);
         let checker = Checker::new(&robot, &model, &scene);
         assert_eq!(checker.check(&b, 0.08, None, &none()), None);

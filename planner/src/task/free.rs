@@ -269,3 +269,37 @@ fn chain_hit(
         }
     })
 }
+
+#[cfg(test)]
+mod chain_tests {
+    use super::chain_hit;
+    use crate::collision::tests::plate_just_within_the_margin;
+    use crate::collision::{Checker, Hit, RobotCollision, Scene};
+    use crate::contact_rules::Allowances;
+    use crate::robot::Robot;
+
+    /// A chain is checked from its last point back: that point keeps its whole margin (a
+    /// plate just within it is found), though no edge of the chain ends there.
+    #[test]
+    fn a_chain_checks_its_first_point() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let ready = robot.ready().to_vec();
+        let world = plate_just_within_the_margin(&robot, &model, &ready);
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let lifted = |by: f64| {
+            let mut q = ready.clone();
+            q[1] -= by;
+            q
+        };
+        let none = Allowances::default();
+        let away = [lifted(0.3), lifted(0.15)];
+        assert_eq!(chain_hit(&checker, &away, 0.08, None, &none), None);
+        let chain = [lifted(0.3), lifted(0.15), ready];
+        match chain_hit(&checker, &chain, 0.08, None, &none) {
+            Some(Hit::World(_, object)) => assert_eq!(object, "plate"),
+            other => panic!("expected the plate, got {other:?}"),
+        }
+    }
+}
