@@ -513,7 +513,7 @@ impl<'a> Checker<'a> {
     /// on breadth first, so that checks spread over the edge in bisection order and
     /// collisions are found early. The ends are proved by the checks nearest them rather
     /// than from themselves: a check at an end proves a stretch on one side only, for a bound
-    /// taken over the whole edge, and such checks cost a search 22 % more time
+    /// taken over the whole edge, and such checks cost a search about 15 % more time
     /// (BENCHMARKS.md, "Edges proved from the middle"). Each check proves at least half the
     /// smallest margin of motion, so the number of checks is at most about the bound on how
     /// far points move divided by that.
