@@ -129,9 +129,15 @@ impl<'a> Checker<'a> {
             axes[link] = poses[link].rotation * axis;
         }
         let element = |k: usize| match (placed_bodies.get(k), model.bodies.get(k)) {
-            (Some(p), Some(b)) => Element {
-                centre: p.pose.translation.vector,
-                extent: b.half_segment + b.core_radius,
+            (Some(p), Some(b)) => match model.link_balls[k] {
+                Some((centre, radius)) => Element {
+                    centre: poses[b.link].transform_point(&centre.into()).coords,
+                    extent: radius,
+                },
+                None => Element {
+                    centre: p.pose.translation.vector,
+                    extent: b.half_segment + b.core_radius,
+                },
             },
             _ => match held {
                 Some(h) => Element {

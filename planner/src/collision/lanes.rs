@@ -91,8 +91,15 @@ pub(super) struct ChainLanes {
 
 impl ChainLanes {
     /// The lanes of `chains` (each base first, as [`super::model::chain_to`] gives them).
+    #[cfg(test)]
     pub(super) fn new(chains: &[Vec<Mover>]) -> ChainLanes {
-        let mut order: Vec<usize> = (0..chains.len()).collect();
+        Self::of(chains, &vec![true; chains.len()])
+    }
+
+    /// The lanes of the chains `k` of `chains` for which `bounded[k]` holds (the others share
+    /// another chain's bounds).
+    pub(super) fn of(chains: &[Vec<Mover>], bounded: &[bool]) -> ChainLanes {
+        let mut order: Vec<usize> = (0..chains.len()).filter(|&k| bounded[k]).collect();
         order.sort_by_key(|&k| std::cmp::Reverse(chains[k].len()));
         let groups = order
             .chunks(LANES)
