@@ -279,10 +279,9 @@ impl RobotCollision {
         // The elements of one link share its first element's chain, bounded about the ball
         // that holds them all.
         let first_on_link: Vec<usize> = (0..chains.len())
-            .map(|k| {
-                (0..k.min(bodies.len()))
-                    .find(|&j| k < bodies.len() && bodies[j].link == bodies[k].link)
-                    .unwrap_or(k)
+            .map(|k| match bodies.get(k) {
+                Some(b) => bodies.iter().position(|o| o.link == b.link).unwrap_or(k),
+                None => k,
             })
             .collect();
         let mut offsets = Vec::with_capacity(chains.len() + 1);

@@ -8,6 +8,23 @@ use crate::robot::Robot;
 use akl_scene::World;
 use akl_tsr::Pose;
 
+/// The pick-and-place world with a fixed box `name` of `size` centred at `at`.
+fn pick_place_with_box(name: &str, size: [f64; 3], at: [f64; 3]) -> World {
+    let mut world = akl_scene::builtin::task("pick_place")
+        .unwrap()
+        .unwrap()
+        .world;
+    world.objects.push(akl_scene::Object {
+        name: name.into(),
+        shape: akl_scene::Shape::Box { size },
+        pose: akl_tsr::pose::pose_from_xyz(at),
+        movable: false,
+        mass: 0.0,
+        friction: 0.5,
+    });
+    world
+}
+
 /// The pick-and-place world with a plate under the fingers at `q`, raised (to a micrometre)
 /// until `q`'s plain check just meets it: the hand keeps more than half its margin from the
 /// plate, but not all of it.
@@ -17,23 +34,7 @@ pub(crate) fn plate_just_within_the_margin(
     q: &[f64],
 ) -> World {
     let tcp = robot.tcp_pose(q).translation.vector;
-    let plate = |z: f64| {
-        let mut world = akl_scene::builtin::task("pick_place")
-            .unwrap()
-            .unwrap()
-            .world;
-        world.objects.push(akl_scene::Object {
-            name: "plate".into(),
-            shape: akl_scene::Shape::Box {
-                size: [0.3, 0.3, 0.01],
-            },
-            pose: akl_tsr::pose::pose_from_xyz([tcp.x, tcp.y, z]),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
-        world
-    };
+    let plate = |z: f64| pick_place_with_box("plate", [0.3, 0.3, 0.01], [tcp.x, tcp.y, z]);
     let meets = |z: f64| {
         let scene = Scene::new(&plate(z), &[]);
         Checker::new(robot, model, &scene)
@@ -287,20 +288,6 @@ mod checks {
         (a, b)
     }
 
-    /// The pick-and-place world with a fixed box `name` of `size` centred at `at`.
-    fn pick_place_with_box(name: &str, size: [f64; 3], at: [f64; 3]) -> World {
-        let mut world = builtin::task("pick_place").unwrap().unwrap().world;
-        world.objects.push(akl_scene::Object {
-            name: name.into(),
-            shape: akl_scene::Shape::Box { size },
-            pose: akl_tsr::pose::pose_from_xyz(at),
-            movable: false,
-            mass: 0.0,
-            friction: 0.5,
-        });
-        world
-    }
-
     /// A block in the hand's palm at the middle of an edge: the screen finds the hand in it
     /// at a point it screens (balls inside the hand reach it there, a quarter of the way,
     /// so no exact test is needed), and where the hand may touch the block the screen and
@@ -340,8 +327,7 @@ mod checks {
     /// Screening finds a post in the way of an edge whose ends are free, at the edge's
     /// middle (its second point), and reports what hit it; with one point, the end, which it
     /// leaves to the edge's plain check, it finds nothing, and the proof alone finds the post
-    /// too. An end beyond the joint limits
-    /// is reported as such.
+    /// too. An end beyond the joint limits is reported as such.
     #[test]
     fn screening_finds_a_collision_inside_an_edge_whose_ends_are_free() {
         let robot = Robot::panda().unwrap();
