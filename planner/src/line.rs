@@ -257,6 +257,33 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
+    /// A line's start keeps its whole margin, though the line's later waypoints are taken as
+    /// checked where the step before them ended: a plate just within the hand's margin under
+    /// the fingers at the start stops a line that lifts the hand straight away from it.
+    #[test]
+    fn a_line_checks_its_start() {
+        let robot = Robot::panda().unwrap();
+        let model = RobotCollision::new(&robot);
+        let start = robot.ready().to_vec();
+        let world = crate::collision::tests::plate_just_within_the_margin(&robot, &model, &start);
+        let scene = Scene::new(&world, &[]);
+        let checker = Checker::new(&robot, &model, &scene);
+        let allow = Allowances::default();
+        let space = Space {
+            checker: &checker,
+            width: robot.open_width(),
+            held: None,
+            allow: &allow,
+        };
+        let base = world.robot_base;
+        let from = base * robot.tcp_pose(&start);
+        let to = Translation3::new(0.0, 0.0, 0.05) * from;
+        match plan_line(&space, &start, &from, &to, &base, &LineOptions::default()) {
+            Err(LineFailure::Collision { hit, .. }) => assert!(hit.to_string().contains("plate")),
+            other => panic!("expected the plate, got {other:?}"),
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(24))]
 
