@@ -137,25 +137,64 @@ pub fn intersects(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> boo
 }
 
 /// Whether the plane of a face of `b`, a box (rounded or not), separates it from `a`, a convex
-/// polyhedron (rounded or not), with at least a nanometre to spare; `false` for other shapes.
-/// Only a sufficient test of being apart: where no face plane separates them, they may be
-/// apart or not.
+/// polyhedron or a box (rounded or not), with at least a nanometre to spare; `false` for other
+/// shapes. Only a sufficient test of being apart: where no face plane separates them, they may
+/// be apart or not.
 fn box_face_separates(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) -> bool {
-    let (points, ra) = if let Some(r) = a.as_round_convex_polyhedron() {
+    box_face_slab(a, pa, b, pb).is_some_and(|slab| slab.width > 1e-9)
+}
+
+/// A slab between two shapes: its unit normal (world frame) and its width, how far apart the
+/// shapes' extents along the normal lie (negative where they overlap along it). Motion along
+/// other directions cannot close the gap, so a proof may bound motion along the normal alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Slab {
+    pub(crate) normal: Vector3<f64>,
+    pub(crate) width: f64,
+}
+
+/// The widest slab between `a`, a convex polyhedron or a box (rounded or not), and `b`, a box
+/// (rounded or not), across one of `b`'s faces: the face's unit normal (world frame, from `b`
+/// towards `a`) and how far `a` lies beyond the face along it (negative where it reaches past
+/// the face's plane); `None` for other shapes. Exact, from `a`'s vertices: one pass over them
+/// is cheaper than the GJK distance a proof would otherwise take, and a gap across a face is
+/// all that motion along its normal must not close.
+pub(crate) fn box_face_slab(
+    a: &SharedShape,
+    pa: &Pose,
+    b: &SharedShape,
+    pb: &Pose,
+) -> Option<Slab> {
+    let corners = |h: Vector| -> Vec<Vector> {
+        (0..8)
+            .map(|i| {
+                let s = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+                Vector::new(s(1) * h.x, s(2) * h.y, s(4) * h.z)
+            })
+            .collect()
+    };
+    let owned;
+    let (points, ra): (&[Vector], f64) = if let Some(r) = a.as_round_convex_polyhedron() {
         (r.inner_shape.points(), r.border_radius)
     } else if let Some(c) = a.as_convex_polyhedron() {
         (c.points(), 0.0)
+    } else if let Some(r) = a.as_round_cuboid() {
+        owned = corners(r.inner_shape.half_extents);
+        (&owned, r.border_radius)
+    } else if let Some(c) = a.as_cuboid() {
+        owned = corners(c.half_extents);
+        (&owned, 0.0)
     } else {
-        return false;
+        return None;
     };
     let (h, rb) = if let Some(r) = b.as_round_cuboid() {
         (r.inner_shape.half_extents, r.border_radius)
     } else if let Some(c) = b.as_cuboid() {
         (c.half_extents, 0.0)
     } else {
-        return false;
+        return None;
     };
-    // The hull's vertices in the box's frame, and their extent along its axes.
+    // `a`'s vertices in the box's frame, and their extent along its axes.
     let relative = pb.inv_mul(pa);
     let turn = relative.rotation.to_rotation_matrix();
     let shift = relative.translation.vector;
@@ -166,8 +205,27 @@ fn box_face_separates(a: &SharedShape, pa: &Pose, b: &SharedShape, pb: &Pose) ->
         lo = lo.inf(&v);
         hi = hi.sup(&v);
     }
-    let half = Vector3::new(h.x, h.y, h.z).add_scalar(ra + rb + 1e-9);
-    (0..3).any(|i| lo[i] > half[i] || hi[i] < -half[i])
+    let half = Vector3::new(h.x, h.y, h.z).add_scalar(ra + rb);
+    let (axis, sign, width) = widest_face(lo - half, -half - hi);
+    Some(Slab {
+        normal: pb.rotation * (sign * Vector3::ith(axis, 1.0)),
+        width,
+    })
+}
+
+/// Of a box's six faces, the one a shape lies furthest beyond, from how far it lies beyond
+/// the + face of each axis (`beyond`, in the box's frame) and the − face (`below`): the axis,
+/// the face's side (1 or −1) and the distance (negative where the shape reaches past it).
+pub(crate) fn widest_face(beyond: Vector3<f64>, below: Vector3<f64>) -> (usize, f64, f64) {
+    (0..3)
+        .flat_map(|i| [(i, 1.0, beyond[i]), (i, -1.0, below[i])])
+        .fold((0, 1.0, f64::NEG_INFINITY), |best, face| {
+            if face.2 > best.2 {
+                face
+            } else {
+                best
+            }
+        })
 }
 
 /// Distance between two parry shapes at the given (f64) poses, 0 when they touch or overlap;
@@ -198,31 +256,65 @@ pub(crate) fn distance_up_to(
     pb: &Pose,
     reach: f64,
 ) -> Option<f64> {
+    separation_up_to(a, pa, b, pb, reach).map(|s| s.distance)
+}
+
+/// What [`distance_up_to`] finds about two shapes: the distance, and the slab it is the width
+/// of, where there is one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Separation {
+    /// The distance, as [`distance_up_to`] gives it.
+    pub(crate) distance: f64,
+    /// A slab at least `distance` wide between the shapes (`b` beyond `a` along its normal).
+    pub(crate) slab: Option<Slab>,
+}
+
+/// [`distance_up_to`], with the slab whose width it is.
+pub(crate) fn separation_up_to(
+    a: &SharedShape,
+    pa: &Pose,
+    b: &SharedShape,
+    pb: &Pose,
+    reach: f64,
+) -> Option<Separation> {
     use parry3d_f64::query::closest_points::closest_points_support_map_support_map_with_params as gjk;
     use parry3d_f64::query::gjk::{GJKResult, VoronoiSimplex};
     let (qa, qb) = (pose(pa), pose(pb));
     let (Some((sa, ra)), Some((sb, rb))) = (core(a), core(b)) else {
         return parry3d_f64::query::distance(&qa, a.as_ref(), &qb, b.as_ref())
             .ok()
-            .map(|d| d.distance.clamp(0.0, reach));
+            .map(|d| Separation {
+                distance: d.distance.clamp(0.0, reach),
+                slab: None,
+            });
     };
     let radii = ra + rb;
     // Everything in `a`'s frame, where GJK answers.
     let ab = qa.inv_mul(&qb);
     let slab =
         |n: Vector| sb.support_point(&ab, -n).dot(n) - sa.local_support_point(n).dot(n) - radii;
-    Some(
-        match gjk(&ab, sa, sb, reach + radii, &mut VoronoiSimplex::new(), None) {
-            GJKResult::ClosestPoints(on_a, on_b, _) => match (on_b - on_a).try_normalize() {
-                Some(n) => slab(n).min((on_b - on_a).length() - radii),
-                None => 0.0,
-            },
-            // A slab at least `reach` wide (or, should GJK give up, whatever it found).
-            GJKResult::NoIntersection(n) | GJKResult::Proximity(n) => slab(n).min(reach),
-            GJKResult::Intersection => 0.0,
+    let (width, normal) = match gjk(&ab, sa, sb, reach + radii, &mut VoronoiSimplex::new(), None) {
+        GJKResult::ClosestPoints(on_a, on_b, _) => match (on_b - on_a).try_normalize() {
+            Some(n) => (slab(n).min((on_b - on_a).length() - radii), Some(n)),
+            None => (0.0, None),
+        },
+        // A slab at least `reach` wide (or, should GJK give up, whatever it found).
+        GJKResult::NoIntersection(n) | GJKResult::Proximity(n) => {
+            let n = n.normalize();
+            (slab(n).min(reach), Some(n))
         }
-        .max(0.0),
-    )
+        GJKResult::Intersection => (0.0, None),
+    };
+    // A slab of negative width separates nothing.
+    let distance = width.max(0.0);
+    let slab = normal.filter(|_| width >= 0.0).map(|n| {
+        let n = qa.rotation * n;
+        Slab {
+            normal: Vector3::new(n.x, n.y, n.z),
+            width: distance,
+        }
+    });
+    Some(Separation { distance, slab })
 }
 
 /// The shape a rounded parry shape grows, as a support map, and by how much it grows it (the
@@ -468,6 +560,69 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(5000))]
+
+        /// The slab across a box's face lies between the box and a hull (rounded or not) or
+        /// a second box: along its normal, the other shape's extent begins at least its width
+        /// beyond the box's, by their supports.
+        #[test]
+        fn a_face_slab_lies_between_the_shapes(
+            placement in near_a_vertex(),
+            other_box in prop::option::of((0.01..0.1, 0.01..0.1, 0.01..0.1)),
+        ) {
+            let placed = hull_and_box(&placement, 0.09);
+            prop_assume!(placed.is_some());
+            let (hull, _, box_pose) = placed.unwrap();
+            let element = match other_box {
+                Some((x, y, z)) => SharedShape::round_cuboid(x, y, z, placement.1),
+                None => hull,
+            };
+            let cube = SharedShape::cuboid(0.05, 0.05, 0.05);
+            let here = Pose::identity();
+            let slab = box_face_slab(&element, &here, &cube, &box_pose).unwrap();
+            prop_assert!((slab.normal.norm() - 1.0).abs() < 1e-9);
+            let n = V::new(slab.normal.x, slab.normal.y, slab.normal.z);
+            let support = |s: &SharedShape, p: &Pose, dir: V| {
+                s.as_support_map().unwrap().support_point(&pose(p), dir).dot(dir)
+            };
+            let apart = -support(&element, &here, -n) - support(&cube, &box_pose, n);
+            prop_assert!(apart >= slab.width - 1e-12, "{} apart, width {}", apart, slab.width);
+        }
+
+        /// The direction a separation comes with is one the two shapes' extents lie at least
+        /// the distance apart along, in the world frame: checked on the supports of a hull and
+        /// a box placed as above, both then turned and moved anywhere (so that a direction
+        /// left in the hull's frame would fail).
+        #[test]
+        fn a_separation_holds_along_its_direction(
+            placement in near_a_vertex(),
+            reach in prop_oneof![0.0..0.03, Just(f64::MAX)],
+            turn in (-3.0..3.0, -3.0..3.0, -3.0..3.0),
+            shift in (-1.0..1.0, -1.0..1.0, -1.0..1.0),
+        ) {
+            let placed = hull_and_box(&placement, 0.09);
+            prop_assume!(placed.is_some());
+            let (hull, _, box_pose) = placed.unwrap();
+            let cube = SharedShape::cuboid(0.05, 0.05, 0.05);
+            let everything = Pose::from_parts(
+                Translation3::new(shift.0, shift.1, shift.2),
+                UnitQuaternion::from_scaled_axis(Vector3::new(turn.0, turn.1, turn.2)),
+            );
+            let (here, there) = (everything, everything * box_pose);
+            let found = separation_up_to(&hull, &here, &cube, &there, reach).unwrap();
+            prop_assert!(found.distance >= 0.0);
+            let Some(slab) = found.slab else {
+                return Ok(());
+            };
+            prop_assert_eq!(slab.width, found.distance);
+            let n = slab.normal;
+            prop_assert!((n.norm() - 1.0).abs() < 1e-9);
+            let n = V::new(n.x, n.y, n.z);
+            let support = |s: &SharedShape, p: &Pose, dir: V| {
+                s.as_support_map().unwrap().support_point(&pose(p), dir).dot(dir)
+            };
+            let apart = -support(&cube, &there, -n) - support(&hull, &here, n);
+            prop_assert!(apart >= found.distance - 1e-12, "{} apart along it, distance {}", apart, found.distance);
+        }
 
         /// parry's distance between a hull (rounded or not) and a 10 cm box placed 9 cm plus a
         /// gap from one of the hull's vertices never exceeds that vertex's own distance to the

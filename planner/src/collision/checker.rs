@@ -13,6 +13,7 @@ use super::scene::{Obstacle, Scene};
 use super::spheres::{gap_between, Placement};
 use super::sweep::{Motion, Proof, Sweep};
 use crate::contact_rules::Allowances;
+use crate::parry_convert::Slab;
 use crate::robot::Robot;
 use crate::{contact_rules, parry_convert};
 use akl_tsr::nalgebra::Vector3;
@@ -107,7 +108,8 @@ impl<'a> Checker<'a> {
     }
 
     /// Writes into `sweep.bounds` the motion bounds of every chain for the joint motion
-    /// `sweep.step` (either way) about the configuration whose link poses are `poses`.
+    /// `sweep.step` (either way) about the configuration whose link poses are `poses`, and
+    /// into `sweep.carried` each chain's first-order motion as vectors.
     ///
     /// Each slot takes the smaller, over the whole stretch, of two bounds (module
     /// documentation): the sum over the joints of each one's turn times the element's reach
@@ -150,14 +152,9 @@ impl<'a> Checker<'a> {
                 },
             },
         };
-        model.lanes.bound(
-            &sweep.step,
-            &axes,
-            poses,
-            element,
-            &model.offsets,
-            &mut sweep.bounds,
-        );
+        model
+            .lanes
+            .bound(sweep, &axes, poses, element, &model.offsets);
     }
 
     /// Upper bound on how far any point of the robot's collision elements, or of `held`,
@@ -370,19 +367,27 @@ impl<'a> Checker<'a> {
                     let gap = o.target.gap(&b.world_spheres, at).max(gap_sq.sqrt());
                     if gap > 0.0 {
                         if !pr.settled(moved, slack + gap) {
-                            nearest.push(Near {
-                                body: k,
-                                obstacle: index,
-                                moved,
-                                slack,
-                                gap,
-                                share: moved.share_within(slack + gap),
-                            });
+                            // Motion across a face of a box may prove more.
+                            let across = o
+                                .target
+                                .face(&b.world_spheres, at)
+                                .map_or(0.0, |face| pr.share_across(k, slack, &face));
+                            let share = moved.share_within(slack + gap).max(across);
+                            if share < pr.fraction {
+                                nearest.push(Near {
+                                    body: k,
+                                    obstacle: index,
+                                    moved,
+                                    slack,
+                                    gap,
+                                    share,
+                                });
+                            }
                         }
                         continue;
                     }
                     if o.target.reaches(&b.world_inside, at)
-                        || !clear_of(&b.world_shape, p, &bounds, o, Some(pr), moved, slack)
+                        || !clear_of(&b.world_shape, p, &bounds, o, Some(pr), (k, moved), slack)
                     {
                         return Err(Hit::World(links[b.link].name.clone(), o.name.clone()));
                     }
@@ -422,7 +427,8 @@ impl<'a> Checker<'a> {
                     (&h.grown, h.margin)
                 };
                 let slack = 0.5 * margin;
-                if !clear_of(shape, &ball, &bounds, o, proof.as_mut(), moved, slack) {
+                let mover = (held_chain, moved);
+                if !clear_of(shape, &ball, &bounds, o, proof.as_mut(), mover, slack) {
                     return Err(Hit::HeldWorld(h.name.clone(), o.name.clone()));
                 }
             }
@@ -460,7 +466,7 @@ impl<'a> Checker<'a> {
                 (0..nearest.len()).min_by(|&x, &y| nearest[x].share.total_cmp(&nearest[y].share))
             {
                 let n = nearest.swap_remove(at);
-                if pr.settled(n.moved, n.slack + n.gap) {
+                if n.share >= pr.fraction {
                     break;
                 }
                 let (b, p, o) = (
@@ -468,17 +474,35 @@ impl<'a> Checker<'a> {
                     &placed_bodies[n.body],
                     &self.scene.obstacles[n.obstacle],
                 );
+                // The exact slab across a face of a box, before an exact distance.
+                let face = parry_convert::box_face_slab(&b.world_shape, &p.pose, &o.shape, &o.pose)
+                    .map_or(0.0, |face| {
+                        let width = face.width - DISTANCE_TOLERANCE;
+                        pr.share_across(n.body, n.slack, &Slab { width, ..face })
+                    });
+                if face >= pr.fraction {
+                    continue;
+                }
+                let n = Near {
+                    share: n.share.max(face),
+                    ..n
+                };
                 // Beyond this distance the pair shortens nothing: GJK may stop there.
                 let reach = pr.useful_clearance(n.moved, n.slack) + DISTANCE_TOLERANCE;
-                let exact = parry_convert::distance_up_to(
+                let separation = parry_convert::separation_up_to(
                     &b.world_shape,
                     &p.pose,
                     &o.shape,
                     &o.pose,
                     reach,
-                )
-                .map_or(0.0, |d| d - DISTANCE_TOLERANCE);
-                pr.limit(n.moved, n.slack + exact.max(n.gap));
+                );
+                let exact = separation.map_or(0.0, |s| s.distance - DISTANCE_TOLERANCE);
+                let across = separation.and_then(|s| s.slab).map(|slab| Slab {
+                    width: exact,
+                    ..slab
+                });
+                let distance = exact.max(n.gap);
+                pr.limit_by_clearance(n.body, n.moved, n.slack, distance, across, n.share);
             }
         }
         Ok(proof.map_or(1.0, |pr| pr.fraction))
@@ -649,7 +673,7 @@ struct Near {
     moved: Motion,
     slack: f64,
     gap: f64,
-    /// The share of the stretch that `gap` proves ([`Motion::share_within`]).
+    /// The share of the stretch that `gap`, or a slab across a face of the object, proves.
     share: f64,
 }
 
@@ -665,8 +689,9 @@ fn self_gap(a: &Body, pa: &Placed, b: &Body, pb: &Placed) -> f64 {
 }
 
 /// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
-/// clear of `o`; with a proof, for an element moving up to `moved` with `slack` to spare,
-/// the clearance found also limits the fraction proved free.
+/// clear of `o`; with a proof, for the element of chain `mover.0` moving up to `mover.1` with
+/// `slack` to spare, the clearance found also limits the fraction proved free (by the motion
+/// along the direction the exact distance separates them in, where that proves more).
 #[inline(always)]
 pub(super) fn clear_of(
     shape: &SharedShape,
@@ -674,7 +699,7 @@ pub(super) fn clear_of(
     bounds: &[Vector3<f64>; 2],
     o: &Obstacle,
     proof: Option<&mut Proof>,
-    moved: Motion,
+    (chain, moved): (usize, Motion),
     slack: f64,
 ) -> bool {
     let Some(pr) = proof else {
@@ -690,10 +715,26 @@ pub(super) fn clear_of(
     if pr.settled(moved, slack) {
         return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
     }
+    // A face of a box that keeps the shapes apart may settle the pair without a distance.
+    let face = parry_convert::box_face_slab(shape, &placed.pose, &o.shape, &o.pose)
+        .map(|face| Slab {
+            width: face.width - DISTANCE_TOLERANCE,
+            ..face
+        })
+        .filter(|face| face.width > 0.0)
+        .map_or(0.0, |face| pr.share_across(chain, slack, &face));
+    if face >= pr.fraction {
+        return true;
+    }
     let reach = pr.useful_clearance(moved, slack) + DISTANCE_TOLERANCE;
-    match parry_convert::distance_up_to(shape, &placed.pose, &o.shape, &o.pose, reach) {
-        Some(d) if d > 0.0 => {
-            pr.limit(moved, slack + (d - DISTANCE_TOLERANCE).max(0.0));
+    match parry_convert::separation_up_to(shape, &placed.pose, &o.shape, &o.pose, reach) {
+        Some(s) if s.distance > 0.0 => {
+            let exact = (s.distance - DISTANCE_TOLERANCE).max(0.0);
+            let across = s.slab.map(|slab| Slab {
+                width: exact,
+                ..slab
+            });
+            pr.limit_by_clearance(chain, moved, slack, exact, across, face);
             true
         }
         Some(_) => false,

@@ -26,7 +26,7 @@
 //!   f²·|Δⱼ|·T/2.
 
 use super::model::Mover;
-use super::sweep::Motion;
+use super::sweep::{Carried, Motion, Sweep};
 use akl_tsr::nalgebra::Vector3;
 use akl_tsr::Pose;
 use smallvec::SmallVec;
@@ -144,21 +144,27 @@ impl ChainLanes {
         ChainLanes { groups }
     }
 
-    /// Writes the motion bounds of every chain for the joint motion `step` into `bounds`:
-    /// `bounds[offsets[k] + m]` for chain k from its m-th joint on (0 past its last).
-    /// `element(k)` places chain k's element; `axes[link]` is the world axis of each link's
-    /// joint, and the link's pose in `poses` puts its origin on that axis.
+    /// Writes the motion bounds of every chain for the joint motion `sweep.step` into
+    /// `sweep.bounds`: `bounds[offsets[k] + m]` for chain k from its m-th joint on (0 past
+    /// its last), and its element's first-order motion through the whole chain into
+    /// `sweep.carried[offsets[k]]`. `element(k)` places chain k's element; `axes[link]` is
+    /// the world axis of each link's joint, and the link's pose in `poses` puts its origin on
+    /// that axis.
     pub(super) fn bound(
         &self,
-        step: &[f64],
+        sweep: &mut Sweep,
         axes: &[Vector3<f64>],
         poses: &[Pose],
         element: impl Fn(usize) -> Element,
         offsets: &[usize],
-        bounds: &mut [Motion],
     ) {
+        let Sweep {
+            step,
+            bounds,
+            carried,
+        } = sweep;
         for group in &self.groups {
-            bound_group(group, step, axes, poses, &element, offsets, bounds);
+            bound_group(group, step, axes, poses, &element, offsets, bounds, carried);
         }
     }
 }
@@ -239,6 +245,7 @@ fn joint_frames(level: &Level, axes: &[Vector3<f64>], poses: &[Pose]) -> [f64x4;
 
 /// [`ChainLanes::bound`] for one group.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn bound_group(
     group: &Group,
     step: &[f64],
@@ -247,6 +254,7 @@ fn bound_group(
     element: &impl Fn(usize) -> Element,
     offsets: &[usize],
     bounds: &mut [Motion],
+    carried: &mut [Carried],
 ) {
     let zero = f64x4::ZERO;
     let half = f64x4::splat(0.5);
@@ -312,9 +320,19 @@ fn bound_group(
             }
         }
     }
+    let [vx, vy, vz, sx, sy, sz, extent, slid, stray] =
+        [vx, vy, vz, sx, sy, sz, extent, slid, stray].map(|v| v.to_array());
     for l in 0..LANES {
         if group.chains[l] != EMPTY {
-            bounds[offsets[group.chains[l]] + group.lengths[l]] = Motion::default();
+            let slot = offsets[group.chains[l]];
+            bounds[slot + group.lengths[l]] = Motion::default();
+            carried[slot] = Carried {
+                velocity: Vector3::new(vx[l], vy[l], vz[l]),
+                spin: Vector3::new(sx[l], sy[l], sz[l]),
+                extent: extent[l],
+                slid: slid[l],
+                stray: stray[l],
+            };
         }
     }
 }
@@ -473,9 +491,13 @@ mod tests {
             let mut expected = vec![Motion { linear: -1.0, higher: -1.0 }; slots];
             let poses: Vec<Pose> = origins.iter().map(|o| Pose::from_parts((*o).into(), Default::default())).collect();
             one_at_a_time(&chains, &step, &axes, &poses, element, &offsets, &mut expected);
-            let mut found = vec![Motion { linear: -2.0, higher: -2.0 }; slots];
-            ChainLanes::new(&chains).bound(&step, &axes, &poses, element, &offsets, &mut found);
-            for (slot, (e, f)) in expected.iter().zip(&found).enumerate() {
+            let mut sweep = Sweep {
+                step: step.clone(),
+                bounds: vec![Motion { linear: -2.0, higher: -2.0 }; slots],
+                carried: vec![Carried::default(); slots],
+            };
+            ChainLanes::new(&chains).bound(&mut sweep, &axes, &poses, element, &offsets);
+            for (slot, (e, f)) in expected.iter().zip(&sweep.bounds).enumerate() {
                 prop_assert_eq!(e.linear.to_bits(), f.linear.to_bits(), "slot {}", slot);
                 prop_assert_eq!(e.higher.to_bits(), f.higher.to_bits(), "slot {}", slot);
             }

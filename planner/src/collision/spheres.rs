@@ -13,6 +13,7 @@
 //! distance from any ball (less its radius) bounds the element's distance from below.
 
 use crate::geometry::Geometry;
+use crate::parry_convert::{widest_face, Slab};
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Matrix3, Vector3};
 use akl_tsr::Pose;
@@ -243,6 +244,30 @@ impl Target {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// For a box, the widest slab between the balls of `spheres` placed by `place` and the
+    /// box across one of the box's faces (its normal from the box towards the balls); `None`
+    /// for other objects. A gap across a face can be closed only by motion along its normal,
+    /// which is often much less than the motion itself (an arm sliding along a shelf), so a
+    /// proof may bound that motion alone.
+    #[inline]
+    pub(super) fn face(&self, spheres: &Spheres, place: &Placement) -> Option<Slab> {
+        let Solid::Box(h) = self.solid else {
+            return None;
+        };
+        let mut lo = Vector3::repeat(f64::INFINITY);
+        let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+        for (c, r) in spheres.centres.iter().zip(&spheres.radii) {
+            let l = self.inverse.apply(&place.apply(c));
+            lo = lo.inf(&l.add_scalar(-r));
+            hi = hi.sup(&l.add_scalar(*r));
+        }
+        let (axis, sign, width) = widest_face(lo - h, -h - hi);
+        Some(Slab {
+            normal: sign * self.inverse.rotation.row(axis).transpose(),
+            width,
+        })
+    }
+
     /// Whether a ball of `inside` placed by `place` reaches into the object: with balls
     /// inside an element ([`super::inside`]), a certain collision. Only the primitives'
     /// distances are exact; for anything else, `false`.
@@ -453,6 +478,38 @@ pub(super) mod tests {
                 .map(|v| target.distance(&(at * Point3::from(*v)).coords))
                 .fold(f64::INFINITY, f64::min);
             prop_assert!(bound <= nearest - border - margin + 1e-9);
+        }
+
+        /// The slab across a box's face separates a Panda element (its hull grown by its
+        /// border and a margin) from the box by at least its width along its normal: the
+        /// hull's extent along the normal and the box's corners' lie that far apart.
+        #[test]
+        fn a_face_slab_separates_the_element_from_the_box_by_its_width(
+            element in 0usize..64,
+            size in prop::array::uniform3(0.01..0.5f64),
+            pose in arb_pose(0.4),
+            at in arb_pose(0.1),
+            margin in 0.0..0.02f64,
+        ) {
+            let (geometry, spheres) = &panda()[element % panda().len()];
+            let target = Target::of(&Shape::Box { size }, &pose);
+            let slab = target.face(&spheres.grown(margin), &Placement::of(&at)).unwrap();
+            prop_assert!((slab.normal.norm() - 1.0).abs() < 1e-12);
+            let (vertices, border) = polytope(geometry);
+            let grown = border + margin;
+            let along = |p: Vector3<f64>| p.dot(&slab.normal);
+            let element: Vec<f64> = vertices.iter().map(|v| along((at * Point3::from(*v)).coords)).collect();
+            let low = element.iter().copied().fold(f64::INFINITY, f64::min) - grown;
+            let corners: Vec<f64> = (0..8)
+                .map(|i| {
+                    let s = |bit: usize, h: f64| if i & bit == 0 { -0.5 * h } else { 0.5 * h };
+                    along((pose * Point3::new(s(1, size[0]), s(2, size[1]), s(4, size[2]))).coords)
+                })
+                .collect();
+            let box_high = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            // The normal points from the box towards the balls.
+            let apart = low - box_high;
+            prop_assert!(slab.width <= apart + 1e-9, "width {} apart {}", slab.width, apart);
         }
 
         /// The same between two elements.

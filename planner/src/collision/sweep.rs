@@ -2,6 +2,8 @@
 //! ([`Sweep`], [`Motion`]) against the clearances found at a check ([`Proof`]).
 
 use super::model::RobotCollision;
+use crate::parry_convert::Slab;
+use akl_tsr::nalgebra::Vector3;
 use std::ops::Add;
 
 /// A bound on how far a point moves over a stretch, kept as a function of the share f of
@@ -81,6 +83,38 @@ impl Add for Motion {
     }
 }
 
+/// The first-order motion of a chain's element at a check, as vectors, and what its motion
+/// can stray from it over the stretch: a bound on the element's motion along one direction
+/// ([`Carried::along`]), which is all that can close a gap found along that direction.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Carried {
+    /// The velocity of the element's centre (metres per share of the stretch).
+    pub(super) velocity: Vector3<f64>,
+    /// The element's turning rate (radians per share of the stretch).
+    pub(super) spin: Vector3<f64>,
+    /// How far the element's points lie from its centre, at most.
+    pub(super) extent: f64,
+    /// The slides' lengths, summed.
+    pub(super) slid: f64,
+    /// How far the motion can stray from the first-order one over the whole stretch.
+    pub(super) stray: f64,
+}
+
+impl Carried {
+    /// A bound on how far any point of the element moves along the unit vector `n` (either
+    /// way) over a share of the stretch: its centre's velocity along `n`, plus what turning
+    /// moves a point `extent` from the centre along `n` (at most the turning rate across `n`
+    /// times `extent`), plus the slides and the stray, which may point any way.
+    pub(super) fn along(&self, n: &Vector3<f64>) -> Motion {
+        Motion {
+            linear: self.velocity.dot(n).abs()
+                + self.spin.cross(n).norm() * self.extent
+                + self.slid,
+            higher: self.stray,
+        }
+    }
+}
+
 /// Work space of an edge check: the joint motion of the stretch being proved free and the
 /// motion bounds derived from it.
 pub(super) struct Sweep {
@@ -90,13 +124,18 @@ pub(super) struct Sweep {
     /// For each chain k of the model, `bounds[offsets[k] + m]` bounds how far any point of
     /// its element moves through the joints `m..` of the chain (0 past the last one).
     pub(super) bounds: Vec<Motion>,
+    /// For each chain k, `carried[offsets[k]]` is its element's first-order motion through
+    /// the whole chain (the other slots are unused).
+    pub(super) carried: Vec<Carried>,
 }
 
 impl Sweep {
     pub(super) fn new(model: &RobotCollision, dof: usize) -> Sweep {
+        let slots = model.offsets.last().copied().unwrap_or(0);
         Sweep {
             step: vec![0.0; dof],
-            bounds: vec![Motion::default(); model.offsets.last().copied().unwrap_or(0)],
+            bounds: vec![Motion::default(); slots],
+            carried: vec![Carried::default(); slots],
         }
     }
 }
@@ -114,6 +153,18 @@ impl Proof<'_> {
     /// Bound on how far chain `k` moves through its joints from `from` on.
     pub(super) fn moved(&self, k: usize, from: usize) -> Motion {
         self.sweep.bounds[self.offsets[k] + from]
+    }
+
+    /// Bound on how far any point of chain `k`'s element moves along the unit vector `n`.
+    pub(super) fn moved_along(&self, k: usize, n: &Vector3<f64>) -> Motion {
+        self.sweep.carried[self.offsets[k]].along(n)
+    }
+
+    /// The share of the stretch over which chain `k`'s element keeps within `slack` beyond
+    /// the far side of `slab`: motion along the slab's normal within its width plus `slack`.
+    pub(super) fn share_across(&self, k: usize, slack: f64, slab: &Slab) -> f64 {
+        self.moved_along(k, &slab.normal)
+            .share_within(slack + slab.width)
     }
 
     /// The clearance beyond which an element moving `moved` with `slack` to spare shortens
@@ -142,6 +193,29 @@ impl Proof<'_> {
             self.fraction = moved.share_within(slack).min(self.fraction);
         }
     }
+
+    /// Limits the fraction to the largest share that one element's clearance proves:
+    /// `distance` (plus `slack`) against its motion in any direction, the width of the slab
+    /// `across` (plus `slack`) against its motion along the slab's normal, or `proved`, a
+    /// share cheaper bounds proved already. `chain` is the element's, `moved` its motion.
+    pub(super) fn limit_by_clearance(
+        &mut self,
+        chain: usize,
+        moved: Motion,
+        slack: f64,
+        distance: f64,
+        across: Option<Slab>,
+        proved: f64,
+    ) {
+        if moved.at(self.fraction) <= slack + distance {
+            return;
+        }
+        let mut share = moved.share_within(slack + distance).max(proved);
+        if let Some(slab) = across.filter(|_| share < self.fraction) {
+            share = share.max(self.share_across(chain, slack, &slab));
+        }
+        self.fraction = self.fraction.min(share);
+    }
 }
 
 #[cfg(test)]
@@ -161,7 +235,7 @@ mod tests {
             fraction in 0.0..1.0f64,
         ) {
             let moved = Motion { linear, higher };
-            let sweep = Sweep { step: Vec::new(), bounds: Vec::new() };
+            let sweep = Sweep { step: Vec::new(), bounds: Vec::new(), carried: Vec::new() };
             let proof = Proof { sweep: &sweep, offsets: &[], fraction };
             let exact = proof.settled(moved, slack + distance);
             let squared = proof.settled_sq(moved, slack, distance * distance);
@@ -207,7 +281,7 @@ mod tests {
             slack in 1e-4..0.2f64,
         ) {
             let moved = Motion { linear, higher };
-            let sweep = Sweep { step: Vec::new(), bounds: Vec::new() };
+            let sweep = Sweep { step: Vec::new(), bounds: Vec::new(), carried: Vec::new() };
             let mut proof = Proof { sweep: &sweep, offsets: &[], fraction: 1.0 };
             proof.limit(moved, slack);
             prop_assert!(moved.at(proof.fraction) <= slack * (1.0 + 1e-12));
