@@ -698,6 +698,7 @@ fn the_intersection_test_has_no_false_positives_near_contact() {
 }
 
 mod motion_bounds {
+    use super::super::checker::{LinkPoses, PlacedBodies};
     use super::super::model::chain_to;
     use super::super::sweep::Sweep;
     use super::*;
@@ -705,6 +706,30 @@ mod motion_bounds {
     use akl_tsr::nalgebra::{Point3, Vector3};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// A random configuration and a random stretch about it (up to 1.5 rad per joint) with
+    /// its bounds written into `sweep`; the link poses and placed elements at the
+    /// configuration; a share f of the stretch, and f signed by the side it is taken on.
+    fn random_stretch(
+        checker: &Checker,
+        limits: &[[f64; 2]],
+        rng: &mut ChaCha8Rng,
+        sweep: &mut Sweep,
+    ) -> (Vec<f64>, LinkPoses, PlacedBodies, f64, f64) {
+        let q: Vec<f64> = limits
+            .iter()
+            .map(|[lo, hi]| rng.gen_range(*lo..*hi))
+            .collect();
+        let size = rng.gen_range(0.01..1.5);
+        for i in 0..q.len() {
+            sweep.step[i] = size * rng.gen_range(-1.0..1.0);
+        }
+        let (poses, placed_bodies) = checker.placements(&q, 0.08);
+        checker.sweep_bounds(&poses, &placed_bodies, None, sweep);
+        let f: f64 = rng.gen_range(0.0..=1.0);
+        let side = if rng.gen_bool(0.5) { f } else { -f };
+        (q, poses, placed_bodies, f, side)
+    }
 
     /// The motion bound of every chain, from every joint on, holds along the stretch: a point
     /// within the element's extent of its centre, moved by the chain's joints from that one
@@ -723,18 +748,8 @@ mod motion_bounds {
         let mut sweep = Sweep::new(&model, robot.dof());
         let mut tight = 0usize;
         for case in 0..400 {
-            let q: Vec<f64> = limits
-                .iter()
-                .map(|[lo, hi]| rng.gen_range(*lo..*hi))
-                .collect();
-            let size = rng.gen_range(0.01..1.5);
-            for i in 0..q.len() {
-                sweep.step[i] = size * rng.gen_range(-1.0..1.0);
-            }
-            let (poses, placed_bodies) = checker.placements(&q, 0.08);
-            checker.sweep_bounds(&poses, &placed_bodies, None, &mut sweep);
-            let f: f64 = rng.gen_range(0.0..=1.0);
-            let side = if rng.gen_bool(0.5) { f } else { -f };
+            let (q, poses, placed_bodies, f, side) =
+                random_stretch(&checker, limits, &mut rng, &mut sweep);
             for (k, (body, placed_body)) in model.bodies.iter().zip(&placed_bodies).enumerate() {
                 let chain = &chain_to(robot.kinematics(), body.link);
                 let extent = body.half_segment + body.core_radius;
@@ -793,18 +808,8 @@ mod motion_bounds {
         };
         let (mut tight, mut smaller) = (0usize, 0usize);
         for case in 0..400 {
-            let q: Vec<f64> = limits
-                .iter()
-                .map(|[lo, hi]| rng.gen_range(*lo..*hi))
-                .collect();
-            let size = rng.gen_range(0.01..1.5);
-            for i in 0..q.len() {
-                sweep.step[i] = size * rng.gen_range(-1.0..1.0);
-            }
-            let (poses, placed_bodies) = checker.placements(&q, 0.08);
-            checker.sweep_bounds(&poses, &placed_bodies, None, &mut sweep);
-            let f: f64 = rng.gen_range(0.0..=1.0);
-            let side = if rng.gen_bool(0.5) { f } else { -f };
+            let (q, poses, placed_bodies, f, side) =
+                random_stretch(&checker, limits, &mut rng, &mut sweep);
             let moved: Vec<f64> = q
                 .iter()
                 .zip(&sweep.step)
