@@ -1,6 +1,6 @@
 //! Collision geometry of robot links, read from the URDF's collision elements.
 
-use akl_tsr::nalgebra::Point3;
+use akl_tsr::nalgebra::{Point3, Vector3};
 use akl_tsr::Pose;
 use serde::Serialize;
 use std::sync::Arc;
@@ -137,4 +137,13 @@ impl Geometry {
             Geometry::RoundHull(ref h) => h.half_length + h.radius,
         }
     }
+}
+
+/// The eight corners of the box centred on the origin with half extents `half` (along the
+/// frame's axes): the vertices bounds and slabs are taken over.
+pub(crate) fn box_corners(half: Vector3<f64>) -> [Vector3<f64>; 8] {
+    std::array::from_fn(|i| {
+        let s = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+        Vector3::new(s(1) * half.x, s(2) * half.y, s(4) * half.z)
+    })
 }

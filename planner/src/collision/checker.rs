@@ -475,11 +475,8 @@ impl<'a> Checker<'a> {
                     &self.scene.obstacles[n.obstacle],
                 );
                 // The exact slab across a face of a box, before an exact distance.
-                let face = parry_convert::box_face_slab(&b.world_shape, &p.pose, &o.shape, &o.pose)
-                    .map_or(0.0, |face| {
-                        let width = face.width - DISTANCE_TOLERANCE;
-                        pr.share_across(n.body, n.slack, &Slab { width, ..face })
-                    });
+                let face = face_slab(&b.world_shape, p, o)
+                    .map_or(0.0, |face| pr.share_across(n.body, n.slack, &face));
                 if face >= pr.fraction {
                     continue;
                 }
@@ -688,6 +685,15 @@ fn self_gap(a: &Body, pa: &Placed, b: &Body, pb: &Placed) -> f64 {
     )
 }
 
+/// The widest slab across a face of `o`, a box, between it and `shape` at `placed.pose`
+/// ([`parry_convert::box_face_slab`]), its width less what distances are trusted to.
+fn face_slab(shape: &SharedShape, placed: &Placed, o: &Obstacle) -> Option<Slab> {
+    parry_convert::box_face_slab(shape, &placed.pose, &o.shape, &o.pose).map(|face| Slab {
+        width: face.width - DISTANCE_TOLERANCE,
+        ..face
+    })
+}
+
 /// Whether `shape` at `placed.pose` (inside the world-axis-aligned box `bounds`) is
 /// clear of `o`; with a proof, for the element of chain `mover.0` moving up to `mover.1` with
 /// `slack` to spare, the clearance found also limits the fraction proved free (by the motion
@@ -716,11 +722,7 @@ pub(super) fn clear_of(
         return !parry_convert::intersects(shape, &placed.pose, &o.shape, &o.pose);
     }
     // A face of a box that keeps the shapes apart may settle the pair without a distance.
-    let face = parry_convert::box_face_slab(shape, &placed.pose, &o.shape, &o.pose)
-        .map(|face| Slab {
-            width: face.width - DISTANCE_TOLERANCE,
-            ..face
-        })
+    let face = face_slab(shape, placed, o)
         .filter(|face| face.width > 0.0)
         .map_or(0.0, |face| pr.share_across(chain, slack, &face));
     if face >= pr.fraction {

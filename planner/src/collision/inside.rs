@@ -13,7 +13,7 @@
 //! extent; each slab gets the ball whose centre, on the slab's middle plane, lies deepest.
 
 use super::spheres::Spheres;
-use crate::geometry::Geometry;
+use crate::geometry::{box_corners, Geometry};
 use akl_tsr::nalgebra::Vector3;
 
 /// Thickest slab an element is cut into for its inside balls (metres): two or three balls
@@ -58,13 +58,7 @@ pub(super) fn inside(geometry: &Geometry) -> Spheres {
                     [(n, h[i]), (-n, h[i])]
                 })
                 .collect();
-            let corners: Vec<Vector3<f64>> = (0..8)
-                .map(|k| {
-                    let s = |bit: usize| if k & bit == 0 { -1.0 } else { 1.0 };
-                    Vector3::new(s(1) * h.x, s(2) * h.y, s(4) * h.z)
-                })
-                .collect();
-            deepest_per_slab(&corners, &planes, 0.0)
+            deepest_per_slab(&box_corners(h), &planes, 0.0)
         }
         Geometry::Capsule { radius, length } => along_axis(Vector3::z(), 0.5 * length, 0.0, radius),
         // parry's cylinder runs along y: balls on its axis, as wide as it allows.

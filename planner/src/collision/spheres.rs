@@ -12,7 +12,7 @@
 //! slabs' balls, each grown by the border, therefore holds the grown element, and the
 //! distance from any ball (less its radius) bounds the element's distance from below.
 
-use crate::geometry::Geometry;
+use crate::geometry::{box_corners, Geometry};
 use crate::parry_convert::{widest_face, Slab};
 use akl_scene::Shape;
 use akl_tsr::nalgebra::{Matrix3, Vector3};
@@ -54,14 +54,7 @@ impl Spheres {
 /// The vertices of a convex polytope, grown by the returned border, that holds `geometry` in
 /// the frame of its parry shape.
 fn polytope(geometry: &Geometry) -> (Vec<Vector3<f64>>, f64) {
-    let corners = |h: [f64; 3]| -> Vec<Vector3<f64>> {
-        (0..8)
-            .map(|i| {
-                let s = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
-                Vector3::new(s(1) * h[0], s(2) * h[1], s(4) * h[2])
-            })
-            .collect()
-    };
+    let corners = |h: [f64; 3]| box_corners(Vector3::from(h)).to_vec();
     match *geometry {
         Geometry::RoundHull(ref hull) => (
             hull.vertices.iter().map(|v| v.coords).collect(),
@@ -500,13 +493,10 @@ pub(super) mod tests {
             let along = |p: Vector3<f64>| p.dot(&slab.normal);
             let element: Vec<f64> = vertices.iter().map(|v| along((at * Point3::from(*v)).coords)).collect();
             let low = element.iter().copied().fold(f64::INFINITY, f64::min) - grown;
-            let corners: Vec<f64> = (0..8)
-                .map(|i| {
-                    let s = |bit: usize, h: f64| if i & bit == 0 { -0.5 * h } else { 0.5 * h };
-                    along((pose * Point3::new(s(1, size[0]), s(2, size[1]), s(4, size[2]))).coords)
-                })
-                .collect();
-            let box_high = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let box_high = box_corners(Vector3::from(size.map(|s| 0.5 * s)))
+                .iter()
+                .map(|c| along((pose * Point3::from(*c)).coords))
+                .fold(f64::NEG_INFINITY, f64::max);
             // The normal points from the box towards the balls.
             let apart = low - box_high;
             prop_assert!(slab.width <= apart + 1e-9, "width {} apart {}", slab.width, apart);

@@ -783,6 +783,7 @@ mod motion_bounds {
             "only {tight} motions came within half their bound"
         );
     }
+
     /// The bound on motion along a direction holds along the stretch: a point within the
     /// element's extent of its centre, moved by the whole chain by any share f of the stretch
     /// either way, moves along any unit vector no further than the bound at f. It is what a
